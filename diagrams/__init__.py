@@ -1,0 +1,1 @@
+"""Functions that assemble Drake Diagrams from typed configuration."""

@@ -1,0 +1,60 @@
+"""The robot alone, welded in place, for looking at it (the robot_state_publisher + RViz view)."""
+
+from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
+from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.visualization import AddFrameTriadIllustration
+
+from diagrams.ddrive_world import ROBOT_NAME, robot_start_pose
+from drake_sim.robot import BODY_LINK, add_robot
+from drake_sim.robot_params import RobotParams
+from drake_sim.scenario import PlanarPose
+
+
+def make_ddrive_model_diagram(
+    robot: RobotParams, *, meshcat: Meshcat | None = None, frame_triad_length: float = 0.15
+) -> Diagram:
+    """Builds a continuous-time plant holding only the robot, its body welded where it would
+    stand at the origin, so its joints (the two wheels) can be posed by hand.
+
+    Ports: none exported; pose the wheels through the plant's context (e.g. JointSliders).
+
+    Args:
+        robot: the robot's dimensions.
+        meshcat: where to draw (illustration and collision geometry), or None.
+        frame_triad_length: length of the frame triads on each link, m; 0 hides them.
+    """
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
+    instance = add_robot(plant, robot, name=ROBOT_NAME)
+    plant.WeldFrames(
+        plant.world_frame(),
+        plant.GetFrameByName(BODY_LINK, instance),
+        robot_start_pose(PlanarPose(), robot),
+    )
+    plant.Finalize()
+    if frame_triad_length > 0:
+        for index in plant.GetBodyIndices(instance):
+            link = plant.get_body(index)
+            if not link.name().endswith("caster"):
+                AddFrameTriadIllustration(
+                    scene_graph=scene_graph,
+                    body=link,
+                    length=frame_triad_length,
+                    radius=frame_triad_length / 40,
+                )
+    if meshcat is not None:
+        MeshcatVisualizer.AddToBuilder(
+            builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)
+        )
+        MeshcatVisualizer.AddToBuilder(
+            builder,
+            scene_graph,
+            meshcat,
+            MeshcatVisualizerParams(
+                role=Role.kProximity, prefix="collision", visible_by_default=False
+            ),
+        )
+    diagram = builder.Build()
+    diagram.set_name("ddrive_model")
+    return diagram

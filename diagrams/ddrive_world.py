@@ -1,0 +1,104 @@
+"""Assembles the diff-drive robot and its world into a Drake Diagram (the launch file's job)."""
+
+import dataclasses as dc
+
+from pydrake.geometry import AddContactMaterial, HalfSpace, Meshcat, ProximityProperties, SceneGraph
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.visualization import AddFrameTriadIllustration, ApplyVisualizationConfig
+
+from drake_sim.resources import make_parser
+from drake_sim.robot import BODY_LINK, add_robot
+from drake_sim.robot_params import RobotParams
+from drake_sim.scenario import PlanarPose, WorldScenario
+
+ROBOT_NAME = "ddrive"
+"""The robot's model instance name; exported ports are named ``ddrive.<signal>``."""
+
+
+@dc.dataclass
+class DdriveWorld:
+    """Handles to what ``add_ddrive_world`` added to a builder."""
+
+    plant: MultibodyPlant
+    scene_graph: SceneGraph
+    robot: ModelInstanceIndex
+
+
+def robot_start_pose(pose: PlanarPose, robot: RobotParams) -> RigidTransform:
+    """X_WB of the robot standing on its wheels and bottom caster at ``pose``.
+
+    The body is lifted 1 mm so the first contact step does not start in penetration.
+    """
+    return RigidTransform(RollPitchYaw(0, 0, pose.yaw), [pose.x, pose.y, robot.wheel.radius + 1e-3])
+
+
+def add_ddrive_world(
+    builder: DiagramBuilder, scenario: WorldScenario, robot: RobotParams
+) -> DdriveWorld:
+    """Adds the plant, the world from ``scenario.world`` and the robot to ``builder``.
+
+    The plant is finalised, and the robot's default pose is its start pose, so a default
+    context starts the robot standing on the ground at ``scenario.robot_pose``.
+    """
+    plant, scene_graph = AddMultibodyPlant(scenario.plant, builder)
+    if scenario.world:
+        parser = make_parser(plant)
+        if "://" in scenario.world:
+            parser.AddModels(url=scenario.world)
+        else:
+            parser.AddModels(file_name=scenario.world)
+    else:
+        props = ProximityProperties()
+        mu = scenario.bare_ground_friction
+        AddContactMaterial(friction=CoulombFriction(mu, mu), properties=props)
+        plant.RegisterCollisionGeometry(
+            plant.world_body(), RigidTransform(), HalfSpace(), "ground", props
+        )
+    instance = add_robot(plant, robot, name=ROBOT_NAME)
+    plant.Finalize()
+    body = plant.GetBodyByName(BODY_LINK, instance)
+    plant.SetDefaultFloatingBaseBodyPose(body, robot_start_pose(scenario.robot_pose, robot))
+    if scenario.frame_triad_length > 0:
+        for index in plant.GetBodyIndices(instance):
+            link = plant.get_body(index)
+            if not link.name().endswith("caster"):
+                AddFrameTriadIllustration(
+                    scene_graph=scene_graph,
+                    body=link,
+                    length=scenario.frame_triad_length,
+                    radius=scenario.frame_triad_length / 40,
+                )
+    return DdriveWorld(plant=plant, scene_graph=scene_graph, robot=instance)
+
+
+def make_ddrive_world_diagram(
+    scenario: WorldScenario, robot: RobotParams, *, meshcat: Meshcat | None = None
+) -> Diagram:
+    """Builds the robot in its world.
+
+    Exported ports:
+        ddrive.actuation (input): wheel torques [left, right], N m.
+        ddrive.state (output): the robot's positions and velocities.
+        body_poses (output): poses of every body in the plant.
+        contact_results (output): the plant's contact results.
+
+    Args:
+        scenario: the world, the robot's start pose and the plant/visualisation configs.
+        robot: the robot's dimensions.
+        meshcat: where to draw, or None for no visualisation.
+    """
+    builder = DiagramBuilder()
+    world = add_ddrive_world(builder, scenario, robot)
+    plant = world.plant
+    builder.ExportInput(plant.get_actuation_input_port(world.robot), f"{ROBOT_NAME}.actuation")
+    builder.ExportOutput(plant.get_state_output_port(world.robot), f"{ROBOT_NAME}.state")
+    builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
+    builder.ExportOutput(plant.get_contact_results_output_port(), "contact_results")
+    if meshcat is not None:
+        ApplyVisualizationConfig(scenario.visualization, builder, meshcat=meshcat)
+    diagram = builder.Build()
+    diagram.set_name("ddrive_world")
+    return diagram

@@ -1,0 +1,1 @@
+"""Drake simulation of a flipping differential-drive robot: models, systems and entry points."""

@@ -1,0 +1,44 @@
+"""Shared command-line plumbing: one-line errors and exit code 2 on bad input."""
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+
+from drake_sim.errors import ConfigError
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_BAD_INPUT = 2
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An argparse parser whose usage errors are one line on stderr and exit code 2."""
+
+    def error(self, message: str):  # noqa: D102 (argparse's own contract)
+        raise ConfigError(f"{self.prog}: {message} (see --help)")
+
+
+def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None = None) -> int:
+    """Runs ``main(argv)`` and turns bad input into one stderr line and exit code 2.
+
+    ``ConfigError`` (and ``ValueError``/``FileNotFoundError`` raised while reading input) is
+    reported as ``error: <message>``; Ctrl-C ends the run quietly with code 0.
+    """
+    try:
+        return main(argv)
+    except ConfigError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        return EXIT_OK
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    return value

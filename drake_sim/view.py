@@ -1,0 +1,90 @@
+"""``python -m drake_sim.view``: look at the diff-drive robot in Meshcat (the RViz launch file).
+
+Without options, the robot stands in the street world with its link frames drawn, simulated in
+real time (zero wheel torque) until Ctrl-C. ``--view-only`` shows the robot alone with a slider
+per wheel joint, like joint_state_publisher_gui.
+"""
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from pydrake.geometry import StartMeshcat
+from pydrake.multibody.meshcat import JointSliders
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+
+from diagrams.ddrive_model import make_ddrive_model_diagram
+from diagrams.ddrive_world import ROBOT_NAME, make_ddrive_world_diagram
+from drake_sim import cli
+from drake_sim.resources import config_dir
+from drake_sim.robot import default_robot_file
+from drake_sim.robot_params import load_robot_params
+from drake_sim.scenario import load_scenario
+
+
+def _parse_args(argv):
+    parser = cli.ArgumentParser(prog="python -m drake_sim.view", description=__doc__.split("\n")[0])
+    parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")
+    parser.add_argument(
+        "--config", type=Path, default=config_dir() / "view.yaml", help="world scenario YAML"
+    )
+    parser.add_argument(
+        "--view-only", action="store_true", help="the robot alone, with joint sliders"
+    )
+    parser.add_argument(
+        "--duration",
+        type=cli.positive_float,
+        default=None,
+        help="seconds to run (simulated, or wall time with --view-only); default: until Ctrl-C",
+    )
+    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
+    return parser.parse_args(argv)
+
+
+def _write_html(meshcat, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(meshcat.StaticHtml())
+    print(f"wrote {path}")
+
+
+def main(argv=None) -> int:
+    args = _parse_args(argv)
+    robot = load_robot_params(args.robot)
+    if args.view_only:
+        meshcat = StartMeshcat()
+        diagram = make_ddrive_model_diagram(robot, meshcat=meshcat)
+        plant = diagram.GetSubsystemByName("plant")
+        sliders = JointSliders(meshcat, plant, lower_limit=-np.pi, upper_limit=np.pi, step=0.01)
+        meshcat.SetCameraPose([1.0, -1.2, 0.6], [0.0, 0.0, robot.wheel.radius])
+        sliders.Run(diagram, timeout=args.duration)
+        if args.record:
+            _write_html(meshcat, args.record)
+        return cli.EXIT_OK
+
+    scenario = load_scenario(args.config)
+    meshcat = StartMeshcat()
+    diagram = make_ddrive_world_diagram(scenario, robot, meshcat=meshcat)
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(scenario.simulator, simulator)
+    context = simulator.get_mutable_context()
+    diagram.GetInputPort(f"{ROBOT_NAME}.actuation").FixValue(context, np.zeros(2))
+    pose = scenario.robot_pose
+    meshcat.SetCameraPose([pose.x - 2.5, pose.y - 2.5, 1.5], [pose.x + 0.5, pose.y, 0.2])
+    if args.record:
+        meshcat.StartRecording()
+    simulator.Initialize()
+    start = time.time()
+    try:
+        simulator.AdvanceTo(args.duration if args.duration is not None else np.inf)
+    finally:
+        if args.record:
+            meshcat.StopRecording()
+            meshcat.PublishRecording()
+            _write_html(meshcat, args.record)
+    print(f"simulated {context.get_time():.2f} s in {time.time() - start:.2f} s wall time")
+    return cli.EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(cli.run(main))

@@ -1,0 +1,1 @@
+"""Motion planning for the Franka Panda on Drake (filled in by the planning issues)."""

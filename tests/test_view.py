@@ -1,0 +1,96 @@
+"""``python -m drake_sim.view``: runs, records, and rejects bad input with exit code 2."""
+
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+import drake_sim.view as mut
+from drake_sim.robot import default_robot_file
+
+
+def _run(*args, timeout=300):
+    return subprocess.run(
+        [sys.executable, "-m", "drake_sim.view", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def test_world_view_records_html(tmp_path):
+    out = tmp_path / "view.html"
+    assert mut.main(["--duration", "0.2", "--record", str(out)]) == 0
+    html = out.read_text()
+    assert "<html" in html.lower()
+    assert "ddrive" in html  # the robot's geometry was sent
+    assert "jersey_barrier" in html
+
+
+def test_view_only_runs_with_sliders(tmp_path):
+    out = tmp_path / "model.html"
+    assert mut.main(["--view-only", "--duration", "0.1", "--record", str(out)]) == 0
+    assert "left_wheel" in out.read_text()
+
+
+def _robot_file(tmp_path, edit):
+    data = yaml.safe_load(default_robot_file().read_text())
+    edit(data)
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _assert_bad_input(result, needle):
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert needle in lines[0]
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda d: d["body"].pop("height"), "body.height"),
+        (lambda d: d["wheel"].update(radius=0), "wheel.radius"),
+        (lambda d: d["body"].update(mass=-2), "body.mass"),
+        (lambda d: d["motor"].update(max_torque="x"), "max_torque"),
+        (lambda d: d["wheel"].update(width=float("nan")), "wheel.width"),
+    ],
+    ids=["missing-key", "zero", "negative", "non-number", "nan"],
+)
+def test_bad_robot_file_is_one_line_and_exit_2(tmp_path, edit, needle):
+    _assert_bad_input(
+        _run("--robot", str(_robot_file(tmp_path, edit)), "--duration", "0.01"), needle
+    )
+
+
+def test_malformed_or_missing_robot_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("body: {length: [")
+    _assert_bad_input(_run("--robot", str(bad)), "malformed")
+    _assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "cannot read")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--duration", "-1"], "duration"),
+        (["--duration", "nan"], "duration"),
+        (["--no-such-flag"], "unrecognized"),
+    ],
+)
+def test_bad_options(args, needle):
+    _assert_bad_input(_run(*args), needle)
+
+
+def test_bad_scenario_file(tmp_path):
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text("world: package://drake_sim_models/worlds/nowhere.sdf\n")
+    _assert_bad_input(_run("--config", str(scenario)), "nowhere.sdf")
+    scenario.write_text("robot_pose: {x: .nan}\n")
+    _assert_bad_input(_run("--config", str(scenario)), "robot_pose.x")
+    scenario.write_text("robot_pos: {x: 1}\n")
+    _assert_bad_input(_run("--config", str(scenario)), "robot_pos")
