@@ -1,6 +1,8 @@
 """The robot alone, welded in place, for looking at it (the robot_state_publisher + RViz view)."""
 
+import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
+from pydrake.multibody.meshcat import JointSliders
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.visualization import AddFrameTriadIllustration
@@ -12,7 +14,11 @@ from drake_sim.scenario import PlanarPose
 
 
 def make_ddrive_model_diagram(
-    robot: RobotParams, *, meshcat: Meshcat | None = None, frame_triad_length: float = 0.15
+    robot: RobotParams,
+    *,
+    meshcat: Meshcat | None = None,
+    frame_triad_length: float = 0.15,
+    joint_sliders: bool = False,
 ) -> Diagram:
     """Builds a continuous-time plant holding only the robot, its body welded where it would
     stand at the origin, so its joints (the two wheels) can be posed by hand.
@@ -23,6 +29,8 @@ def make_ddrive_model_diagram(
         robot: the robot's dimensions.
         meshcat: where to draw (illustration and collision geometry), or None.
         frame_triad_length: length of the frame triads on each link, m; 0 hides them.
+        joint_sliders: add a Meshcat slider per wheel joint (a ``JointSliders`` system named
+            ``joint_sliders``; run it with ``JointSliders.Run(diagram)``). Needs ``meshcat``.
     """
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
@@ -55,6 +63,11 @@ def make_ddrive_model_diagram(
                 role=Role.kProximity, prefix="collision", visible_by_default=False
             ),
         )
+    if joint_sliders:
+        if meshcat is None:
+            raise ValueError("joint_sliders needs a Meshcat")
+        sliders = JointSliders(meshcat, plant, lower_limit=-np.pi, upper_limit=np.pi, step=0.01)
+        builder.AddNamedSystem("joint_sliders", sliders)
     diagram = builder.Build()
     diagram.set_name("ddrive_model")
     return diagram

@@ -51,8 +51,10 @@ class WorldScenario:
     random_seed: int = 0  # Seed for anything random in the scenario.
 
 
-def load_scenario(filename, schema=WorldScenario, *, defaults=None):
+def load_scenario(filename, schema=WorldScenario, *, defaults=None, check=True):
     """Loads a scenario YAML into ``schema`` (unknown keys are errors; missing keys keep defaults).
+
+    With ``check`` (for a ``WorldScenario``), the values are checked too.
 
     Raises:
         ConfigError: if the file cannot be read or parsed, or holds a bad value.
@@ -69,7 +71,8 @@ def load_scenario(filename, schema=WorldScenario, *, defaults=None):
     except Exception as e:  # Drake raises RuntimeError/TypeError/ValueError/yaml errors.
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise ConfigError(f"{filename}: {first}") from None
-    check_world_scenario(scenario, str(filename))
+    if check:
+        check_world_scenario(scenario, str(filename))
     return scenario
 
 

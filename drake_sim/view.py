@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import StartMeshcat
-from pydrake.multibody.meshcat import JointSliders
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
 from diagrams.ddrive_model import make_ddrive_model_diagram
@@ -53,9 +52,8 @@ def main(argv=None) -> int:
     robot = load_robot_params(args.robot)
     if args.view_only:
         meshcat = StartMeshcat()
-        diagram = make_ddrive_model_diagram(robot, meshcat=meshcat)
-        plant = diagram.GetSubsystemByName("plant")
-        sliders = JointSliders(meshcat, plant, lower_limit=-np.pi, upper_limit=np.pi, step=0.01)
+        diagram = make_ddrive_model_diagram(robot, meshcat=meshcat, joint_sliders=True)
+        sliders = diagram.GetSubsystemByName("joint_sliders")
         meshcat.SetCameraPose([1.0, -1.2, 0.6], [0.0, 0.0, robot.wheel.radius])
         sliders.Run(diagram, timeout=args.duration)
         if args.record:
