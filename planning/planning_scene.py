@@ -1,0 +1,365 @@
+"""The planning scene: the Panda, world objects and objects held in the hand, with fast queries.
+
+The robot model is built once; objects are added to and removed from the model of Drake's
+``SceneGraphCollisionChecker`` at run time (``AddCollisionShapeToBody`` into every checker
+context, one geometry group per object; ``RemoveAllAddedCollisionShapes(group)``), which takes
+about a millisecond per add and a tenth of that per remove (see
+``benchmarks/planning_scene_benchmark.py``) and never rebuilds the plant. World objects hang on
+the world body; attached objects hang on ``panda_attachment``, a body welded to the hand, so they
+move with the hand, are checked against the world and the arm links, and not against the hand
+and fingers (filtered in the SceneGraph model, see ``panda_model``).
+
+World objects are not checked against ``panda_link0``: it is welded to the world, and Drake
+filters collisions within a welded group.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from pydrake.geometry import GeometryId
+from pydrake.math import RigidTransform
+from pydrake.planning import SceneGraphCollisionChecker
+
+from planning.config import PandaPlanningConfig, load_panda_config
+from planning.errors import ErrorCode, PlanningError
+from planning.panda_model import (
+    ATTACHMENT_BODY,
+    PandaModel,
+    build_panda_model,
+    disabled_collision_pairs,
+)
+from planning.scene_objects import SceneObject
+
+_WORLD_PREFIX = "world/"
+_ATTACHED_PREFIX = "attached/"
+
+
+class PlanningScene:
+    """The Panda, the objects around it and the objects it holds.
+
+    Configurations ``q`` are the 7 arm joints (rad), with the fingers at ``finger_positions``,
+    or the plant's full 9 positions (7 arm joints, then the 2 fingers in m).
+
+    Args:
+        config: the planning configuration; ``config/panda.yaml`` when None. Its ``table``
+            becomes the world object "table".
+        meshcat: when given, ``publish`` shows the scene there.
+    """
+
+    def __init__(self, config: PandaPlanningConfig | None = None, *, meshcat=None):
+        self._config = config if config is not None else load_panda_config()
+        model = build_panda_model(self._config.model, meshcat=meshcat)
+        options = self._config.model
+        self._checker = SceneGraphCollisionChecker(
+            model=model.diagram,
+            robot_model_instances=[model.instance],
+            edge_step_size=options.edge_step_size,
+            env_collision_padding=options.env_collision_padding,
+            self_collision_padding=options.self_collision_padding,
+        )
+        self._model = dataclasses.replace(model, diagram=self._checker.model())
+        self._meshcat = meshcat
+        self._world: dict[str, SceneObject] = {}
+        self._attached: dict[str, SceneObject] = {}
+        self._finger_positions = np.full(2, options.finger_position)
+        # A context of our own to name colliding geometries and evaluate poses.
+        self._context = self._checker.MakeStandaloneModelContext()
+        self._geometry_names: dict[GeometryId, str] = {}
+        # The checker filters body pairs: declare the SRDF's pairs there too, so that shapes
+        # added later (held objects on the attachment body) are filtered as well.
+        for link_a, link_b in disabled_collision_pairs(options):
+            self.allow_collision(link_a, link_b)
+        self.place_position: np.ndarray | None = None  # p_W of a place target, m, if any
+        if self._config.table is not None:
+            table = self._config.table
+            self.add_box("table", table.size, RigidTransform(np.asarray(table.position)))
+
+    # ----------------------------------------------------------------------------- model ----
+    @property
+    def config(self) -> PandaPlanningConfig:
+        return self._config
+
+    @property
+    def model(self) -> PandaModel:
+        """The robot model (its ``diagram`` is owned by the collision checker)."""
+        return self._model
+
+    @property
+    def plant(self):
+        return self._checker.plant()
+
+    @property
+    def checker(self) -> SceneGraphCollisionChecker:
+        """The collision checker holding the scene's geometry (for planners)."""
+        return self._checker
+
+    @property
+    def meshcat(self):
+        return self._meshcat
+
+    @property
+    def finger_positions(self) -> np.ndarray:
+        """Each finger's position, m (0 closed, 0.04 open), used with 7-joint q."""
+        return self._finger_positions.copy()
+
+    @finger_positions.setter
+    def finger_positions(self, value) -> None:
+        value = np.broadcast_to(np.asarray(value, dtype=float), (2,)).copy()
+        if not np.all(np.isfinite(value)):
+            raise ValueError(f"finger positions must be finite, got {value}")
+        self._finger_positions = value
+
+    def full_q(self, q) -> np.ndarray:
+        """Returns the plant's 9 positions for a 7-joint arm q (fingers added) or a 9-vector.
+
+        Raises:
+            ValueError: q has the wrong size or is not finite.
+        """
+        q = np.asarray(q, dtype=float).reshape(-1)
+        if q.size == 7:
+            full = np.empty(9)
+            full[self._model.arm_indices] = q
+            full[self._model.finger_indices] = self._finger_positions
+            q = full
+        elif q.size != 9:
+            raise ValueError(f"q must have 7 (arm) or 9 (arm and fingers) values, got {q.size}")
+        if not np.all(np.isfinite(q)):
+            raise ValueError(f"q is not finite: {q.tolist()}")
+        return q
+
+    def arm_q(self, q) -> np.ndarray:
+        """Returns the 7 arm joints of a 7- or 9-vector q."""
+        return self.full_q(q)[self._model.arm_indices]
+
+    def plant_context(self, q):
+        """Returns a plant context of this scene's model at q (shared scratch: do not keep it)."""
+        return self._checker.UpdateContextPositions(self._context, self.full_q(q))
+
+    # --------------------------------------------------------------------------- objects ----
+    @property
+    def world_objects(self) -> dict[str, SceneObject]:
+        """World objects by name; their ``X_PO`` is ``X_WO``."""
+        return dict(self._world)
+
+    @property
+    def attached_objects(self) -> dict[str, SceneObject]:
+        """Held objects by name; their ``X_PO`` is ``X_AO`` in the hand's attachment frame A."""
+        return dict(self._attached)
+
+    def has_object(self, name: str) -> bool:
+        return name in self._world or name in self._attached
+
+    def add_object(self, obj: SceneObject) -> None:
+        """Adds a world object (``obj.X_PO`` is its pose in the world).
+
+        Raises:
+            PlanningError: INVALID_OBJECT_NAME when the name is taken.
+        """
+        if self.has_object(obj.name):
+            raise PlanningError(
+                ErrorCode.INVALID_OBJECT_NAME, f"the scene already has an object {obj.name!r}"
+            )
+        self._add_geometry(_WORLD_PREFIX + obj.name, self.plant.world_body(), obj)
+        self._world[obj.name] = obj
+
+    def add_box(self, name: str, size, X_WO: RigidTransform) -> None:
+        """Adds a box of full extents ``size`` (m) centred at ``X_WO``."""
+        self.add_object(SceneObject(name, "box", tuple(size), X_WO))
+
+    def add_cylinder(self, name: str, radius: float, length: float, X_WO: RigidTransform) -> None:
+        """Adds a cylinder (m) along the z axis of ``X_WO``, centred at its origin."""
+        self.add_object(SceneObject(name, "cylinder", (radius, length), X_WO))
+
+    def add_sphere(self, name: str, radius: float, X_WO: RigidTransform) -> None:
+        """Adds a sphere of ``radius`` (m) centred at the origin of ``X_WO``."""
+        self.add_object(SceneObject(name, "sphere", (radius,), X_WO))
+
+    def remove_object(self, name: str) -> SceneObject:
+        """Removes a world or attached object and returns it.
+
+        Raises:
+            PlanningError: INVALID_OBJECT_NAME when there is no such object.
+        """
+        if name in self._world:
+            self._remove_geometry(_WORLD_PREFIX + name)
+            return self._world.pop(name)
+        if name in self._attached:
+            self._remove_geometry(_ATTACHED_PREFIX + name)
+            return self._attached.pop(name)
+        raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, self._unknown(name))
+
+    def move_object(self, name: str, X_WO: RigidTransform) -> None:
+        """Moves a world object to a new pose."""
+        obj = self._world.get(name)
+        if obj is None:
+            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, self._unknown(name))
+        self.remove_object(name)
+        self.add_object(obj.with_pose(X_WO))
+
+    def clear(self) -> None:
+        """Removes every world object (the table too); held objects stay."""
+        for name in list(self._world):
+            self.remove_object(name)
+
+    def attach(self, name: str, q) -> None:
+        """Attaches a world object to the hand, keeping its pose relative to the hand at q.
+
+        Raises:
+            PlanningError: INVALID_OBJECT_NAME when there is no such world object.
+        """
+        obj = self._world.get(name)
+        if obj is None:
+            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, self._unknown(name, "world "))
+        X_WA = self.attachment_pose(q)
+        self.remove_object(name)
+        held = obj.with_pose(X_WA.inverse() @ obj.X_PO)
+        self._add_geometry(_ATTACHED_PREFIX + name, self._attachment_body(), held)
+        self._attached[name] = held
+
+    def attach_new(self, obj: SceneObject) -> None:
+        """Attaches a new object given in the attachment frame A (``obj.X_PO`` is ``X_AO``)."""
+        if self.has_object(obj.name):
+            raise PlanningError(
+                ErrorCode.INVALID_OBJECT_NAME, f"the scene already has an object {obj.name!r}"
+            )
+        self._add_geometry(_ATTACHED_PREFIX + obj.name, self._attachment_body(), obj)
+        self._attached[obj.name] = obj
+
+    def detach(self, name: str, q) -> None:
+        """Puts a held object back in the world at its pose when the robot is at q."""
+        obj = self._attached.get(name)
+        if obj is None:
+            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, self._unknown(name, "attached "))
+        X_WO = self.attachment_pose(q) @ obj.X_PO
+        self.remove_object(name)
+        self.add_object(obj.with_pose(X_WO))
+
+    def object_pose(self, name: str, q=None) -> RigidTransform:
+        """Returns X_WO of a world object, or of a held one with the robot at q."""
+        if name in self._world:
+            return self._world[name].X_PO
+        if name in self._attached:
+            if q is None:
+                raise ValueError(f"the pose of the held object {name!r} needs q")
+            return self.attachment_pose(q) @ self._attached[name].X_PO
+        raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, self._unknown(name))
+
+    def attachment_pose(self, q) -> RigidTransform:
+        """Returns X_WA, the pose of the attachment frame (the hand frame) at q."""
+        plant = self.plant
+        return plant.EvalBodyPoseInWorld(self.plant_context(q), self._attachment_body())
+
+    # --------------------------------------------------------------------------- queries ----
+    def is_collision_free(self, q) -> bool:
+        """True when q has no collision (self or environment, held objects included)."""
+        return self._checker.CheckConfigCollisionFree(self.full_q(q))
+
+    def is_edge_collision_free(self, q_a, q_b) -> bool:
+        """True when the straight joint-space segment is collision-free at the edge step."""
+        return self._checker.CheckEdgeCollisionFree(self.full_q(q_a), self.full_q(q_b))
+
+    def in_joint_limits(self, q, tolerance: float = 1e-9) -> bool:
+        """True when every arm joint of q is within its limits (fingers are not checked)."""
+        q = self.full_q(q)
+        idx = self._model.arm_indices
+        lower = self.plant.GetPositionLowerLimits()[idx] - tolerance
+        upper = self.plant.GetPositionUpperLimits()[idx] + tolerance
+        return bool(np.all(q[idx] >= lower) and np.all(q[idx] <= upper))
+
+    def colliding_pairs(self, q) -> list[tuple[str, str]]:
+        """Returns the pairs of names (robot links, object names) in collision at q, sorted."""
+        self._checker.UpdateContextPositions(self._context, self.full_q(q))
+        query_object = self._context.GetQueryObject()
+        pairs = set()
+        for pair in query_object.ComputePointPairPenetration():
+            name_a, body_a = self._describe(query_object, pair.id_A)
+            name_b, body_b = self._describe(query_object, pair.id_B)
+            if body_a == body_b or self._checker.IsCollisionFilteredBetween(body_a, body_b):
+                continue
+            pairs.add(tuple(sorted((name_a, name_b))))
+        return sorted(pairs)
+
+    def describe_collisions(self, q) -> str:
+        """Returns "a <-> b, c <-> d" for the colliding pairs at q ("" when there are none)."""
+        return ", ".join(f"{a} <-> {b}" for a, b in self.colliding_pairs(q))
+
+    def clearance(self, q, influence_distance: float = 1.0) -> float:
+        """Returns the smallest signed distance (m) between unfiltered pairs at q.
+
+        Negative is penetration; ``influence_distance`` when nothing is closer than that.
+        """
+        result = self._checker.CalcRobotClearance(self.full_q(q), influence_distance)
+        distances = result.distances()
+        return float(distances.min()) if len(distances) else float(influence_distance)
+
+    def allow_collision(self, link_a: str, link_b: str) -> None:
+        """Stops checking two robot links against each other (a MoveIt ACM entry).
+
+        Raises:
+            PlanningError: INVALID_OBJECT_NAME for an unknown link.
+        """
+        bodies = []
+        for name in (link_a, link_b):
+            if not self.plant.HasBodyNamed(name, self._model.instance):
+                raise PlanningError(
+                    ErrorCode.INVALID_OBJECT_NAME, f"the Panda has no link {name!r}"
+                )
+            bodies.append(self.plant.GetBodyByName(name, self._model.instance).index())
+        if bodies[0] != bodies[1]:
+            self._checker.SetCollisionFilteredBetween(bodies[0], bodies[1], True)
+
+    def load_yaml(self, filename) -> None:
+        """Replaces the world objects by those of our scene YAML (``scene_io``)."""
+        from planning.scene_io import load_scene_yaml
+
+        load_scene_yaml(self, filename)
+
+    def load_moveit(self, filename) -> None:
+        """Replaces the world objects by those of a MoveIt PlanningScene YAML (``scene_io``)."""
+        from planning.scene_io import load_moveit_scene
+
+        load_moveit_scene(self, filename)
+
+    def save_yaml(self, filename) -> None:
+        """Writes the scene in our YAML (``scene_io``)."""
+        from planning.scene_io import save_scene_yaml
+
+        save_scene_yaml(self, filename)
+
+    def publish(self, q) -> None:
+        """Shows the robot at q and every object in Meshcat (when the scene has one)."""
+        from planning.scene_display import publish_scene
+
+        publish_scene(self, q)
+
+    # --------------------------------------------------------------------------- private ----
+    def _attachment_body(self):
+        return self.plant.GetBodyByName(ATTACHMENT_BODY, self._model.instance)
+
+    def _add_geometry(self, group: str, body, obj: SceneObject) -> None:
+        inspector = self._context.GetQueryObject().inspector()
+        before = set(inspector.GetAllGeometryIds())
+        if not self._checker.AddCollisionShapeToBody(group, body, obj.drake_shape(), obj.X_PO):
+            raise PlanningError(ErrorCode.INVALID_SCENE, f"could not add object {obj.name!r}")
+        inspector = self._context.GetQueryObject().inspector()
+        for geometry_id in set(inspector.GetAllGeometryIds()) - before:
+            self._geometry_names[geometry_id] = obj.name
+
+    def _remove_geometry(self, group: str) -> None:
+        name = group.split("/", 1)[1]
+        self._checker.RemoveAllAddedCollisionShapes(group)
+        self._geometry_names = {k: v for k, v in self._geometry_names.items() if v != name}
+
+    def _describe(self, query_object, geometry_id):
+        inspector = query_object.inspector()
+        body = self.plant.GetBodyFromFrameId(inspector.GetFrameId(geometry_id))
+        name = self._geometry_names.get(geometry_id, body.name())
+        return name, body.index()
+
+    def _unknown(self, name: str, kind: str = "") -> str:
+        known = sorted(self._world) if kind != "attached " else sorted(self._attached)
+        if not kind:
+            known = sorted([*self._world, *self._attached])
+        return f"no {kind}object named {name!r}; the scene has {known}"

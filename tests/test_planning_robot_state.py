@@ -1,0 +1,172 @@
+"""RobotState: forward and inverse kinematics, named configurations, reading a diagram."""
+
+import time
+
+import numpy as np
+import pytest
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
+
+import planning as mut
+from planning import ErrorCode, PlanningError
+
+N_POSES = 100
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return mut.PlanningScene()
+
+
+@pytest.fixture
+def dut(scene):
+    return mut.RobotState(scene)
+
+
+def random_reachable_poses(scene, dut, count, seed):
+    """Collision-free random configurations and their end-effector poses."""
+    rng = np.random.default_rng(seed)
+    lower = scene.plant.GetPositionLowerLimits()[:7]
+    upper = scene.plant.GetPositionUpperLimits()[:7]
+    samples = []
+    while len(samples) < count:
+        q = rng.uniform(lower, upper)
+        if scene.is_collision_free(q):
+            samples.append((q, dut.fk(q)))
+    return samples
+
+
+def test_fk_at_ready_matches_the_franka_ready_pose(dut):
+    """Franka's "ready" pose puts the flange at (0.307, 0, 0.590) m pointing down, and the
+    TCP 0.1034 m further down."""
+    X_WE = dut.fk(dut.named("ready"))
+    np.testing.assert_allclose(X_WE.translation(), [0.30689, 0.0, 0.48688], atol=1e-4)
+    np.testing.assert_allclose(X_WE.rotation().col(2), [0, 0, -1], atol=1e-5)
+    np.testing.assert_allclose(
+        dut.fk(frame="panda_link8").translation(), [0.30689, 0, 0.59028], atol=1e-4
+    )
+    np.testing.assert_allclose(
+        dut.fk(np.zeros(7)).translation(), [0.088, 0, 0.8226], atol=1e-4
+    )  # 0.926 - 0.1034
+    assert dut.hand_pose().IsExactlyEqualTo(dut.fk())
+
+
+def test_current_q_and_named(dut):
+    np.testing.assert_allclose(dut.q, dut.named("ready"))
+    dut.set_q(dut.named("extended"))
+    np.testing.assert_allclose(dut.q, dut.named("extended"))
+    assert dut.q_full.shape == (9,)
+    with pytest.raises(PlanningError) as info:
+        dut.named("dance")
+    assert info.value.code == ErrorCode.INVALID_GOAL and "ready" in info.value.message
+    with pytest.raises(PlanningError, match="frame"):
+        dut.fk(frame="panda_link99")
+    with pytest.raises(ValueError, match="7"):
+        dut.set_q([0.0, 1.0])
+    with pytest.raises(ValueError, match="finite"):
+        dut.set_q([np.nan] * 7)
+
+
+@pytest.mark.parametrize("mode", ["pose", "position", "orientation"])
+def test_ik_round_trips_fk(scene, dut, mode):
+    options = mut.IkOptions(time_budget=1.0, max_restarts=10, seed=3)
+    solved, times = 0, []
+    for _q, X_WE in random_reachable_poses(scene, dut, N_POSES, seed=7):
+        kwargs = {
+            "pose": {"X_WE": X_WE},
+            "position": {"p_WE": X_WE.translation()},
+            "orientation": {"R_WE": X_WE.rotation()},
+        }[mode]
+        try:
+            result = dut.ik(**kwargs, options=options)
+        except PlanningError as e:
+            assert e.code == ErrorCode.NO_IK_SOLUTION
+            continue
+        solved += 1
+        times.append(result.solve_time)
+        X = dut.fk(result.q)
+        if mode != "orientation":
+            assert np.max(np.abs(X.translation() - X_WE.translation())) < 1.1e-3
+        if mode != "position":
+            angle = (X.rotation().inverse() @ X_WE.rotation()).ToAngleAxis().angle()
+            assert angle < 0.0101
+        assert scene.is_collision_free(result.q)
+    print(f"IK {mode}: {solved}/{N_POSES} solved, median {np.median(times) * 1e3:.1f} ms")
+    assert solved >= 0.95 * N_POSES
+
+
+def test_ik_is_deterministic_and_seeded(dut):
+    X_WE = dut.fk(dut.named("extended"))
+    a = dut.ik(X_WE, q_seed=dut.named("transport"))
+    b = dut.ik(X_WE, q_seed=dut.named("transport"))
+    np.testing.assert_array_equal(a.q, b.q)
+    assert a.attempts >= 1 and a.solve_time > 0
+
+
+def test_ik_without_target_solves_the_current_pose(dut):
+    result = dut.ik()
+    assert dut.fk(result.q).translation() == pytest.approx(dut.fk().translation(), abs=1.1e-3)
+
+
+def test_unreachable_pose_raises_no_ik_solution_quickly(dut):
+    start = time.perf_counter()
+    with pytest.raises(PlanningError) as info:
+        dut.ik(RigidTransform([1.5, 0.0, 0.3]))
+    assert info.value.code == ErrorCode.NO_IK_SOLUTION
+    assert time.perf_counter() - start < 0.1
+    # Within the reach bound but unreachable in that orientation: bounded by the time budget.
+    start = time.perf_counter()
+    R_up = RotationMatrix()  # hand z up, at the edge of the workspace
+    with pytest.raises(PlanningError) as info:
+        dut.ik(RigidTransform(R_up, [0.0, 0.0, 1.3]), options=mut.IkOptions(time_budget=0.5))
+    assert info.value.code == ErrorCode.NO_IK_SOLUTION
+    assert time.perf_counter() - start < 1.5
+
+
+def test_ik_rejects_bad_targets(dut):
+    with pytest.raises(PlanningError) as info:
+        dut.ik(p_WE=[np.nan, 0, 0.5])
+    assert info.value.code == ErrorCode.INVALID_GOAL
+    with pytest.raises(PlanningError):
+        dut.ik(p_WE=[0.4, 0.0])
+    with pytest.raises(PlanningError) as info:
+        dut.ik(p_WE=[0.4, 0, 0.4], frame="no_frame")
+    assert info.value.code == ErrorCode.FRAME_NOT_FOUND
+
+
+def test_ik_avoids_obstacles(scene, dut):
+    """A target inside a box has no collision-free solution; IK says what collides."""
+    p = np.array([0.5, 0.0, 0.3])
+    scene.add_box("ik_block", [0.2, 0.2, 0.2], RigidTransform(p))
+    try:
+        with pytest.raises(PlanningError) as info:
+            dut.ik(p_WE=p, options=mut.IkOptions(time_budget=0.5, max_restarts=3))
+        assert info.value.code == ErrorCode.NO_IK_SOLUTION
+    finally:
+        scene.remove_object("ik_block")
+    assert dut.ik(p_WE=p).q.shape == (7,)
+
+
+def test_reader_reports_the_latest_joints_from_a_diagram(dut):
+    q = np.concatenate([dut.named("extended"), [0.02, 0.02]])
+    builder = DiagramBuilder()
+    source = builder.AddSystem(ConstantVectorSource(np.concatenate([q, np.zeros(9)])))
+    reader = builder.AddSystem(dut.make_reader(input_size=18))
+    builder.Connect(source.get_output_port(), reader.get_input_port())
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    q_read, X_WE = dut.read(context)
+    np.testing.assert_allclose(q_read, q[:7])
+    np.testing.assert_allclose(dut.q_full, q)
+    assert X_WE.IsNearlyEqualTo(dut.fk(q), 1e-12)
+
+
+def test_read_plant_context(scene, dut):
+    plant = scene.plant
+    context = plant.CreateDefaultContext()
+    q = np.concatenate([dut.named("transport"), [0.01, 0.01]])
+    plant.SetPositions(context, q)
+    q_read, X_WE = dut.read_plant_context(plant, context, scene.model.instance)
+    np.testing.assert_allclose(q_read, q[:7])
+    assert X_WE.IsNearlyEqualTo(dut.fk(q), 1e-12)

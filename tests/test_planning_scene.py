@@ -1,0 +1,238 @@
+"""PlanningScene: run-time objects, attaching, queries, YAML in and out, Meshcat display."""
+
+import numpy as np
+import pytest
+from pydrake.geometry import Meshcat
+from pydrake.math import RigidTransform, RollPitchYaw
+
+import planning as mut
+from planning import ErrorCode, PlanningError
+
+
+@pytest.fixture(scope="module")
+def base_scene():
+    return mut.PlanningScene()
+
+
+@pytest.fixture
+def dut(base_scene):
+    """The shared scene, restored to the table alone after each test."""
+    yield base_scene
+    for name in list(base_scene.attached_objects):
+        base_scene.remove_object(name)
+    base_scene.clear()
+    table = base_scene.config.table
+    base_scene.add_box("table", table.size, RigidTransform(table.position))
+    base_scene.finger_positions = base_scene.config.model.finger_position
+
+
+@pytest.fixture
+def ready(dut):
+    return dut.model.named_configurations["ready"]
+
+
+def test_new_scene_has_the_table_and_ready_is_free(dut, ready):
+    assert list(dut.world_objects) == ["table"]
+    assert dut.is_collision_free(ready)
+    assert dut.colliding_pairs(ready) == []
+    assert 0.05 < dut.clearance(ready) < 1.0
+
+
+def test_adding_and_removing_boxes_changes_collisions(dut, ready):
+    dut.add_box("block", [0.1, 0.1, 0.1], RigidTransform([0.31, 0.0, 0.5]))
+    assert not dut.is_collision_free(ready)
+    assert ("block", "panda_hand") in dut.colliding_pairs(ready)
+    assert "block <-> panda_hand" in dut.describe_collisions(ready)
+    assert dut.clearance(ready) < 0.0
+    removed = dut.remove_object("block")
+    assert removed.name == "block" and dut.is_collision_free(ready)
+    dut.add_box("near", [0.1, 0.1, 0.1], RigidTransform([0.31, 0.0, 0.95]))
+    assert dut.is_collision_free(ready)
+    dut.move_object("near", RigidTransform([0.31, 0.0, 0.5]))
+    assert not dut.is_collision_free(ready)
+
+
+def test_cylinders_spheres_and_rotated_boxes(dut, ready):
+    dut.add_sphere("ball", 0.05, RigidTransform([0.31, 0.0, 0.45]))
+    assert dut.colliding_pairs(ready)
+    dut.remove_object("ball")
+    dut.add_cylinder(
+        "can", 0.03, 0.3, RigidTransform(RollPitchYaw(np.pi / 2, 0, 0), [0.31, 0, 0.6])
+    )
+    assert not dut.is_collision_free(ready)
+    dut.remove_object("can")
+    # A thin plate beside the hand collides only once rotated into it.
+    dut.add_box("plate", [0.3, 0.01, 0.3], RigidTransform([0.31, 0.15, 0.5]))
+    assert dut.is_collision_free(ready)
+    dut.move_object("plate", RigidTransform(RollPitchYaw(0, 0, np.pi / 2), [0.31, 0.15, 0.5]))
+    assert not dut.is_collision_free(ready)
+
+
+def test_edges_and_joint_limits(dut, ready):
+    extended = dut.model.named_configurations["extended"]
+    assert dut.is_edge_collision_free(ready, extended)
+    dut.add_box("wall", [0.02, 1.0, 1.0], RigidTransform([0.55, 0.0, 0.5]))
+    assert dut.is_collision_free(ready)
+    assert not dut.is_edge_collision_free(ready, extended)
+    assert dut.in_joint_limits(ready) and not dut.in_joint_limits(ready + 3.0)
+
+
+def test_attached_box_moves_with_the_hand_and_collides_with_the_world(dut, ready):
+    X_WA = dut.attachment_pose(ready)
+    dut.add_box("cube", [0.04, 0.04, 0.04], X_WA @ RigidTransform([0, 0, 0.11]))
+    assert dut.is_collision_free(ready)  # held between the fingers: not a collision
+    dut.finger_positions = 0.01  # fingers closing through a world cube collide ...
+    assert ("cube", "panda_leftfinger") in dut.colliding_pairs(ready)
+    dut.attach("cube", ready)  # ... but not once it is held
+    assert dut.is_collision_free(ready)
+    assert list(dut.attached_objects) == ["cube"] and "cube" not in dut.world_objects
+    q = ready.copy()
+    q[0] = 1.0
+    p_before = dut.object_pose("cube", ready).translation()
+    p_after = dut.object_pose("cube", q).translation()
+    p_hand = dut.attachment_pose(q).translation()
+    assert np.linalg.norm(p_after - p_before) > 0.2
+    assert np.linalg.norm(p_after - p_hand) == pytest.approx(0.11, abs=1e-9)
+    # Put a post where the cube (not the hand) passes.
+    dut.add_box("post", [0.05, 0.05, 0.05], RigidTransform(p_after))
+    assert ("cube", "post") in dut.colliding_pairs(q)
+    dut.remove_object("post")
+    dut.detach("cube", q)
+    assert "cube" in dut.world_objects
+    np.testing.assert_allclose(dut.world_objects["cube"].X_PO.translation(), p_after, atol=1e-12)
+
+
+def test_attached_object_collides_with_arm_links(dut, ready):
+    """A long held bar is checked against the arm (only the hand and fingers are exempt)."""
+    dut.attach_new(mut.SceneObject("bar", "box", (0.04, 0.04, 0.6), RigidTransform([0, 0, -0.2])))
+    assert any("bar" in pair for pair in dut.colliding_pairs(ready))
+
+
+def test_bad_input(dut, ready):
+    with pytest.raises(PlanningError) as info:
+        dut.remove_object("ghost")
+    assert info.value.code == ErrorCode.INVALID_OBJECT_NAME and "table" in info.value.message
+    with pytest.raises(PlanningError, match="already"):
+        dut.add_box("table", [1, 1, 1], RigidTransform())
+    with pytest.raises(PlanningError):
+        dut.attach("ghost", ready)
+    with pytest.raises(PlanningError):
+        dut.detach("table", ready)
+    with pytest.raises(ValueError, match="3 size values"):
+        dut.add_box("b", [0.1, 0.1], RigidTransform())
+    with pytest.raises(ValueError, match="positive"):
+        dut.add_sphere("s", -0.1, RigidTransform())
+    with pytest.raises(ValueError, match="finite"):
+        dut.add_box("n", [0.1, 0.1, 0.1], RigidTransform([np.nan, 0, 0]))
+    with pytest.raises(ValueError, match="shape"):
+        mut.SceneObject("c", "cone", (1.0,), RigidTransform())
+    with pytest.raises(ValueError, match="finite"):
+        mut.make_pose([0, 0, 0], [0, 0, np.nan, 1])
+    with pytest.raises(ValueError, match="zero"):
+        mut.make_pose([0, 0, 0], [0, 0, 0, 0])
+    with pytest.raises(ValueError, match="7"):
+        dut.is_collision_free([0.0] * 5)
+    with pytest.raises(PlanningError):
+        dut.allow_collision("panda_hand", "panda_tail")
+    assert list(dut.world_objects) == ["table"]
+
+
+def test_our_yaml_round_trips(dut, tmp_path):
+    text = """
+table: {size: [1.0, 1.0, 0.04], position: [0.3, 0.0, -0.02]}
+object: {size: [0.04, 0.04, 0.08], position: [0.5, 0.1, 0.04], mass: 0.1, yaw: 0.3}
+obstacle: {size: [0.05, 0.3, 0.2], position: [0.5, -0.1, 0.1]}
+place: {position: [0.5, -0.3, 0.04]}
+objects:
+  - {name: can, shape: cylinder, size: [0.03, 0.12], position: [0.4, 0.3, 0.06],
+     orientation: [0, 0, 0.3826834, 0.9238795]}
+  - {name: ball, shape: sphere, size: [0.05], position: [0.3, 0.4, 0.05]}
+"""
+    path = tmp_path / "scene.yaml"
+    path.write_text(text)
+    dut.load_yaml(path)
+    objects = dut.world_objects
+    assert sorted(objects) == ["ball", "can", "object", "obstacle", "table"]
+    assert objects["object"].X_PO.rotation().ToRollPitchYaw().yaw_angle() == pytest.approx(0.3)
+    assert objects["can"].size == (0.03, 0.12)
+    np.testing.assert_allclose(dut.place_position, [0.5, -0.3, 0.04])
+    out = tmp_path / "saved.yaml"
+    dut.save_yaml(out)
+    dut.clear()
+    dut.load_yaml(out)
+    for name, obj in objects.items():
+        again = dut.world_objects[name]
+        assert again.shape == obj.shape and again.size == pytest.approx(obj.size)
+        assert again.X_PO.IsNearlyEqualTo(obj.X_PO, 1e-9)
+    np.testing.assert_allclose(dut.place_position, [0.5, -0.3, 0.04])
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("table: {size: [1, 1, 1], position: [0, 0]}", "3 values"),
+        ("table: {size: [1, 1], position: [0, 0, 0]}", "3 size values"),
+        ("obstacle: {size: [1, 1, 1], position: [0, .nan, 0]}", "finite"),
+        ("objects: [{name: x, shape: blob, size: [1], position: [0, 0, 0]}]", "shape"),
+        ("tabel: {size: [1, 1, 1]}", "unknown"),
+        ("table: {size: [1, 1, 1]", "while parsing|expected"),
+        (
+            "objects: [{name: a, shape: sphere, size: [0.1], position: [0, 0, 1]},"
+            " {name: a, shape: sphere, size: [0.1], position: [0, 0, 2]}]",
+            "duplicate",
+        ),
+    ],
+)
+def test_malformed_yaml_raises_with_a_clear_message(dut, tmp_path, text, match):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(PlanningError, match=match) as info:
+        dut.load_yaml(path)
+    assert info.value.code == ErrorCode.INVALID_SCENE
+    assert list(dut.world_objects) == ["table"]  # a bad file leaves the scene as it was
+
+
+def test_moveit_scene_with_pose_multi_primitives_and_bad_types(dut, tmp_path):
+    path = tmp_path / "moveit.yaml"
+    path.write_text("""
+world:
+  collision_objects:
+    - id: shelf
+      pose: {position: [1.0, 0, 0], orientation: [0, 0, 0, 1]}
+      primitives: [{type: box, dimensions: [0.1, 0.2, 0.3]}, {type: 2, dimensions: [0.05]}]
+      primitive_poses:
+        - {position: [0, 0, 0.5], orientation: [0, 0, 0, 1]}
+        - {position: {x: 0, y: 0, z: 1}, orientation: {x: 0, y: 0, z: 0, w: 1}}
+""")
+    dut.load_moveit(path)
+    assert sorted(dut.world_objects) == ["shelf", "shelf#1"]
+    np.testing.assert_allclose(dut.world_objects["shelf#1"].X_PO.translation(), [1, 0, 1])
+    assert dut.world_objects["shelf#1"].shape == "sphere"
+    path.write_text(
+        "world: {collision_objects: [{id: c, primitives: [{type: cone, "
+        "dimensions: [1, 1]}], primitive_poses: [{position: [0, 0, 0]}]}]}"
+    )
+    with pytest.raises(PlanningError, match="cone"):
+        dut.load_moveit(path)
+    path.write_text(
+        "world: {collision_objects: [{id: c, primitives: [{type: box, "
+        "dimensions: [1, 1, 1]}], primitive_poses: []}]}"
+    )
+    with pytest.raises(PlanningError, match="poses"):
+        dut.load_moveit(path)
+
+
+def test_meshcat_shows_attached_objects_in_another_colour(tmp_path):
+    meshcat = Meshcat()
+    scene = mut.PlanningScene(meshcat=meshcat)
+    q = scene.model.named_configurations["ready"]
+    scene.attach_new(
+        mut.SceneObject("held", "box", (0.04, 0.04, 0.04), RigidTransform([0, 0, 0.11]))
+    )
+    scene.publish(q)
+    assert meshcat.HasPath("planning/objects/world/table")
+    assert meshcat.HasPath("planning/objects/attached/held")
+    assert meshcat.HasPath("planning/robot")
+    from planning import scene_display
+
+    assert scene_display.ATTACHED_COLOR.rgba.tolist() != scene_display.WORLD_COLOR.rgba.tolist()
