@@ -12,7 +12,7 @@ from pydrake.visualization import AddFrameTriadIllustration, ApplyVisualizationC
 from drake_sim.resources import make_parser
 from drake_sim.robot import BODY_LINK, add_robot
 from drake_sim.robot_params import RobotParams
-from drake_sim.scenario import PlanarPose, WorldScenario
+from drake_sim.scenario import GroundConfig, PlanarPose, WorldScenario
 
 ROBOT_NAME = "ddrive"
 """The robot's model instance name; exported ports are named ``ddrive.<signal>``."""
@@ -35,28 +35,37 @@ def robot_start_pose(pose: PlanarPose, robot: RobotParams) -> RigidTransform:
     return RigidTransform(RollPitchYaw(0, 0, pose.yaw), [pose.x, pose.y, robot.wheel.radius + 1e-3])
 
 
+def add_ground(plant: MultibodyPlant, ground: GroundConfig) -> None:
+    """Registers the ground, a half-space whose surface is z = 0, on the plant's world body.
+
+    World files draw the street but leave its collision to this function: a half-space is only
+    safe on the world body itself (see ``models/asphalt_ground/model.sdf``).
+    """
+    props = ProximityProperties()
+    friction = CoulombFriction(ground.mu_static, ground.mu_dynamic)
+    AddContactMaterial(friction=friction, properties=props)
+    plant.RegisterCollisionGeometry(
+        plant.world_body(), RigidTransform(), HalfSpace(), "ground", props
+    )
+
+
 def add_ddrive_world(
     builder: DiagramBuilder, scenario: WorldScenario, robot: RobotParams
 ) -> DdriveWorld:
-    """Adds the plant, the world from ``scenario.world`` and the robot to ``builder``.
+    """Adds the plant, the ground, the world from ``scenario.world`` and the robot to
+    ``builder``.
 
     The plant is finalised, and the robot's default pose is its start pose, so a default
     context starts the robot standing on the ground at ``scenario.robot_pose``.
     """
     plant, scene_graph = AddMultibodyPlant(scenario.plant, builder)
+    add_ground(plant, scenario.ground)
     if scenario.world:
         parser = make_parser(plant)
         if "://" in scenario.world:
             parser.AddModels(url=scenario.world)
         else:
             parser.AddModels(file_name=scenario.world)
-    else:
-        props = ProximityProperties()
-        mu = scenario.bare_ground_friction
-        AddContactMaterial(friction=CoulombFriction(mu, mu), properties=props)
-        plant.RegisterCollisionGeometry(
-            plant.world_body(), RigidTransform(), HalfSpace(), "ground", props
-        )
     instance = add_robot(plant, robot, name=ROBOT_NAME)
     plant.Finalize()
     body = plant.GetBodyByName(BODY_LINK, instance)

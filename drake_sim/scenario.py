@@ -24,15 +24,22 @@ class PlanarPose:
 
 
 @dc.dataclass
+class GroundConfig:
+    """The ground: a half-space at z = 0 on the world body (asphalt by default)."""
+
+    mu_static: float = 0.9  # Coulomb friction, unitless.
+    mu_dynamic: float = 0.8  # Coulomb friction, unitless; at most mu_static.
+
+
+@dc.dataclass
 class WorldScenario:
     """The diff-drive robot in its world."""
 
-    # SDFormat world (package:// URI or path); empty for a bare ground plane.
+    # SDFormat world (package:// URI or path); empty for the bare ground.
     world: str = "package://drake_sim_models/worlds/ddrive.world.sdf"
+    ground: GroundConfig = dc.field(default_factory=GroundConfig)
     # Where the robot starts, standing on its wheels and bottom caster.
     robot_pose: PlanarPose = dc.field(default_factory=PlanarPose)
-    # Ground friction used only when `world` is empty (the world file has its own), unitless.
-    bare_ground_friction: float = 0.8
     # Length of the frame triads drawn on the robot's links, m; 0 hides them.
     frame_triad_length: float = 0.15
     plant: MultibodyPlantConfig = dc.field(
@@ -91,7 +98,10 @@ def check_world_scenario(scenario: WorldScenario, filename: str = "scenario") ->
             raise ConfigError(f"{filename}: 'robot_pose.{key}' must be finite")
     if not scenario.plant.time_step > 0:
         raise ConfigError(f"{filename}: 'plant.time_step' must be > 0 (a discrete plant)")
-    if not (math.isfinite(scenario.bare_ground_friction) and scenario.bare_ground_friction >= 0):
-        raise ConfigError(f"{filename}: 'bare_ground_friction' must be finite and >= 0")
+    g = scenario.ground
+    if not (math.isfinite(g.mu_static) and math.isfinite(g.mu_dynamic) and g.mu_dynamic >= 0):
+        raise ConfigError(f"{filename}: 'ground' friction must be finite and >= 0")
+    if g.mu_dynamic > g.mu_static:
+        raise ConfigError(f"{filename}: 'ground.mu_dynamic' must not exceed 'ground.mu_static'")
     if not (math.isfinite(scenario.frame_triad_length) and scenario.frame_triad_length >= 0):
         raise ConfigError(f"{filename}: 'frame_triad_length' must be finite and >= 0")

@@ -23,7 +23,7 @@ def _default_dict():
 def test_default_file_loads():
     dut = mut.load_robot_params(default_robot_file())
     assert dut.body.length == 0.40
-    assert dut.wheel.radius == 0.10
+    assert dut.wheel.radius == 0.15
     assert dut.motor.max_torque > 0
     # Realistic: a few kilograms, standing level on wheels and caster.
     assert 1.0 < dut.total_mass < 10.0
@@ -52,7 +52,7 @@ def test_contract_keys_alone_are_enough(tmp_path):
         (lambda d: d["wheel"].update(mass="heavy"), "mass"),
         (lambda d: d["body"].update(colour="red"), "colour"),
         (lambda d: d["wheel"].update(radius=0.05), "wheel.radius"),
-        (lambda d: d["caster"].update(radius=0.04), "caster.radius"),
+        (lambda d: d["caster"].update(radius=0.06), "caster.radius"),
     ],
     ids=[
         "missing-key",

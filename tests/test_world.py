@@ -12,8 +12,10 @@ from pydrake.multibody.tree import CalcSpatialInertia, ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
+from diagrams.ddrive_world import add_ground
 from drake_sim import generate_models as mut
 from drake_sim.resources import make_parser, models_dir, package_uri
+from drake_sim.scenario import GroundConfig
 
 WORLD_URL = package_uri("worlds/ddrive.world.sdf")
 # The robot's corridor above the street surface (world frame, m); the ground's top is z = 0.
@@ -26,6 +28,7 @@ def _build(contact_model="hydroelastic_with_fallback"):
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(time_step=2e-3, contact_model=contact_model)
     plant, scene_graph = AddMultibodyPlant(config, builder)
+    add_ground(plant, GroundConfig())
     make_parser(plant).AddModels(url=WORLD_URL)
     plant.Finalize()
     return builder.Build(), plant, scene_graph
