@@ -1,6 +1,7 @@
 """Assembles the diff-drive robot and its world into a Drake Diagram (the launch file's job)."""
 
 import dataclasses as dc
+import logging
 
 from pydrake.geometry import AddContactMaterial, HalfSpace, Meshcat, ProximityProperties, SceneGraph
 from pydrake.math import RigidTransform, RollPitchYaw
@@ -35,6 +36,20 @@ def robot_start_pose(pose: PlanarPose, robot: RobotParams) -> RigidTransform:
     return RigidTransform(RollPitchYaw(0, 0, pose.yaw), [pose.x, pose.y, robot.wheel.radius + 1e-3])
 
 
+class _HalfSpaceWarningFilter(logging.Filter):
+    """Drops Drake's warning that deformable bodies cannot touch a rigid half-space: there are
+    no deformable bodies here, and it would print on every context created."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "half spaces are not currently supported for deformable" not in record.getMessage()
+
+
+def _quiet_half_space_warning() -> None:
+    logger = logging.getLogger("drake")
+    if not any(isinstance(f, _HalfSpaceWarningFilter) for f in logger.filters):
+        logger.addFilter(_HalfSpaceWarningFilter())
+
+
 def add_ground(plant: MultibodyPlant, ground: GroundConfig) -> None:
     """Registers the ground, a half-space whose surface is z = 0, on the plant's world body.
 
@@ -47,6 +62,7 @@ def add_ground(plant: MultibodyPlant, ground: GroundConfig) -> None:
     plant.RegisterCollisionGeometry(
         plant.world_body(), RigidTransform(), HalfSpace(), "ground", props
     )
+    _quiet_half_space_warning()
 
 
 def add_ddrive_world(

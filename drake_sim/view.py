@@ -1,25 +1,25 @@
 """``python -m drake_sim.view``: look at the diff-drive robot in Meshcat (the RViz launch file).
 
 Without options, the robot stands in the street world with its link frames drawn, simulated in
-real time (zero wheel torque) until Ctrl-C. ``--view-only`` shows the robot alone with a slider
-per wheel joint, like joint_state_publisher_gui.
+real time until Ctrl-C, with the odometry display (the odometry's arrow and trail in blue, the
+true trail in green) and keyboard teleop: W/S faster forward/backward, A/D turn, Space stop.
+``--view-only`` shows the robot alone with a slider per wheel joint, like
+joint_state_publisher_gui.
 """
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import StartMeshcat
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
 from diagrams.ddrive_model import make_ddrive_model_diagram
-from diagrams.ddrive_world import ROBOT_NAME, make_ddrive_world_diagram
 from drake_sim import cli
+from drake_sim.flip_run import FlipRun
+from drake_sim.flip_scenario import load_flip_scenario
 from drake_sim.resources import config_dir
 from drake_sim.robot import default_robot_file
 from drake_sim.robot_params import load_robot_params
-from drake_sim.scenario import load_scenario
 
 
 def _parse_args(argv):
@@ -60,27 +60,22 @@ def main(argv=None) -> int:
             _write_html(meshcat, args.record)
         return cli.EXIT_OK
 
-    scenario = load_scenario(args.config)
+    scenario = load_flip_scenario(args.config)
     meshcat = StartMeshcat()
-    diagram = make_ddrive_world_diagram(scenario, robot, meshcat=meshcat)
-    simulator = Simulator(diagram)
-    ApplySimulatorConfig(scenario.simulator, simulator)
-    context = simulator.get_mutable_context()
-    diagram.GetInputPort(f"{ROBOT_NAME}.actuation").FixValue(context, np.zeros(2))
-    pose = scenario.robot_pose
+    run = FlipRun(scenario, robot, meshcat=meshcat, controller="teleop")
+    pose = scenario.scene.robot_pose
     meshcat.SetCameraPose([pose.x - 2.5, pose.y - 2.5, 1.5], [pose.x + 0.5, pose.y, 0.2])
+    print("drive: click the Meshcat page, then W/S faster forward/backward, A/D turn, Space stop")
     if args.record:
         meshcat.StartRecording()
-    simulator.Initialize()
-    start = time.time()
     try:
-        simulator.AdvanceTo(args.duration if args.duration is not None else np.inf)
+        run.advance_to(args.duration if args.duration is not None else np.inf)
     finally:
         if args.record:
             meshcat.StopRecording()
             meshcat.PublishRecording()
             _write_html(meshcat, args.record)
-    print(f"simulated {context.get_time():.2f} s in {time.time() - start:.2f} s wall time")
+    print(f"simulated {run.context.get_time():.2f} s in {run.wall_time:.2f} s wall time")
     return cli.EXIT_OK
 
 

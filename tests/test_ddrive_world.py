@@ -9,10 +9,10 @@ from pydrake.systems.analysis import Simulator
 
 import diagrams.ddrive_world as mut
 from diagrams.ddrive_model import make_ddrive_model_diagram
+from drake_sim.flip_scenario import load_flip_scenario
 from drake_sim.resources import config_dir
 from drake_sim.robot import default_robot_file
 from drake_sim.robot_params import load_robot_params
-from drake_sim.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")
@@ -22,7 +22,7 @@ def robot():
 
 @pytest.fixture(scope="module")
 def scenario():
-    return load_scenario(config_dir() / "view.yaml")
+    return load_flip_scenario(config_dir() / "view.yaml").scene
 
 
 def _rest(diagram, seconds):

@@ -24,6 +24,7 @@ def test_world_view_records_html(tmp_path):
     out = tmp_path / "view.html"
     assert mut.main(["--duration", "0.2", "--record", str(out)]) == 0
     paths = scene_paths(out.read_text())
+    assert any(p.startswith("/odometry/") for p in paths)  # the odometry display
     for model in (
         "ddrive/base_link",
         "ddrive/left_wheel",
@@ -98,9 +99,9 @@ def test_bad_options(args, needle):
 
 def test_bad_scenario_file(tmp_path):
     scenario = tmp_path / "scenario.yaml"
-    scenario.write_text("world: package://drake_sim_models/worlds/nowhere.sdf\n")
+    scenario.write_text("scene: {world: package://drake_sim_models/worlds/nowhere.sdf}\n")
     _assert_bad_input(_run("--config", str(scenario)), "nowhere.sdf")
-    scenario.write_text("robot_pose: {x: .nan}\n")
+    scenario.write_text("scene: {robot_pose: {x: .nan}}\n")
     _assert_bad_input(_run("--config", str(scenario)), "robot_pose.x")
-    scenario.write_text("robot_pos: {x: 1}\n")
+    scenario.write_text("scene: {robot_pos: {x: 1}}\n")
     _assert_bad_input(_run("--config", str(scenario)), "robot_pos")

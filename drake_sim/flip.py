@@ -1,0 +1,150 @@
+"""``python -m drake_sim.flip``: the robot shuttles along a line by flipping over its axle.
+
+With a viewer (the default) it runs in real time in Meshcat, drawing the robot, its odometry
+trail and its true trail, until Ctrl-C or ``--duration``. ``--headless`` runs flat out for 20 s
+(or ``--duration``). ``--teleop`` turns the flip controller off: drive with the W/A/S/D keys
+and Space to stop, in the Meshcat page. ``--report`` writes the JSON report (DESIGN.md).
+Exit codes: 0 for a completed run, 1 if the simulation failed, 2 for bad input.
+"""
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from pydrake.common.yaml import yaml_load_typed
+from pydrake.geometry import StartMeshcat
+
+from drake_sim import cli
+from drake_sim.errors import ConfigError
+from drake_sim.flip_run import FlipRun
+from drake_sim.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
+from drake_sim.resources import config_dir
+from drake_sim.robot import default_robot_file
+from drake_sim.robot_params import load_robot_params
+from drake_sim.teleop import BUTTONS
+
+HEADLESS_DURATION = 20.0  # s, the default run length without a viewer.
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise cli.argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise cli.argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
+
+
+def _parse_args(argv):
+    parser = cli.ArgumentParser(prog="python -m drake_sim.flip", description=__doc__.split("\n")[0])
+    parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")
+    parser.add_argument(
+        "--config", type=Path, default=config_dir() / "flip.yaml", help="scenario YAML"
+    )
+    parser.add_argument(
+        "--duration",
+        type=cli.positive_float,
+        help=f"simulated seconds (default: until Ctrl-C with a viewer; {HEADLESS_DURATION:g} "
+        "when --headless)",
+    )
+    parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
+    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
+    parser.add_argument("--report", type=Path, help="write the JSON report")
+    parser.add_argument("--seed", type=_non_negative_int, help="random seed (IMU noise)")
+    parser.add_argument("--teleop", action="store_true", help="drive with Meshcat keys")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scenario value, e.g. --set flip.drive_speed=1.0 (repeatable)",
+    )
+    args = parser.parse_args(argv)
+    if args.teleop and args.headless:
+        raise ConfigError("--teleop needs the viewer: drop --headless")
+    return args
+
+
+def apply_overrides(scenario: FlipScenario, overrides: list[str]) -> FlipScenario:
+    """Applies ``KEY=VALUE`` overrides (dotted keys, YAML values) to a scenario.
+
+    Raises:
+        ConfigError: for a malformed override, an unknown key or a bad value.
+    """
+    for item in overrides:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ConfigError(f"--set {item!r}: expected KEY=VALUE")
+        text = value
+        for part in reversed(key.split(".")):
+            text = f"{{{part}: {text}}}"
+        try:
+            scenario = yaml_load_typed(schema=FlipScenario, data=text, defaults=scenario)
+        except Exception as e:  # Drake raises RuntimeError/ValueError/yaml errors.
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise ConfigError(f"--set {item!r}: {first}") from None
+    check_flip_scenario(scenario, "--set")
+    return scenario
+
+
+def main(argv=None) -> int:
+    args = _parse_args(argv)
+    robot = load_robot_params(args.robot)
+    scenario = apply_overrides(load_flip_scenario(args.config), args.set)
+    viewer = not args.headless
+    duration = args.duration
+    if duration is None:
+        duration = math.inf if viewer else HEADLESS_DURATION
+    meshcat = StartMeshcat() if viewer or args.record else None
+    run = FlipRun(
+        scenario,
+        robot,
+        seed=args.seed,
+        meshcat=meshcat if viewer or args.record else None,
+        controller="teleop" if args.teleop else "flip",
+    )
+    if meshcat is not None:
+        pose = scenario.scene.robot_pose
+        meshcat.SetCameraPose([pose.x - 1.0, pose.y - 3.5, 1.6], [pose.x + 0.5, pose.y, 0.2])
+        if args.teleop:
+            keys = ", ".join(label for label, _, _ in BUTTONS)
+            print(f"teleop: click the Meshcat page, then use its buttons or keys: {keys}")
+        if args.record:
+            meshcat.StartRecording()
+    failure = None
+    try:
+        run.advance_to(duration)
+    except KeyboardInterrupt:
+        pass
+    except RuntimeError as e:
+        failure = str(e).strip().splitlines()[0]
+    finally:
+        if args.record:
+            meshcat.StopRecording()
+            meshcat.PublishRecording()
+            args.record.parent.mkdir(parents=True, exist_ok=True)
+            args.record.write_text(meshcat.StaticHtml())
+    report = run.report()
+    summary = (
+        f"flips {report.flips} (failed {report.failed_flips}, recovered {report.recoveries}), "
+        f"lateral deviation {report.max_lateral_deviation_m:.3f} m, "
+        f"travel extent {report.travel_extent_m:.2f} m, "
+        f"odometry error {report.odometry_error_m:.3f} m over {report.distance_travelled_m:.1f} m, "
+        f"{report.sim_time_s:.1f} s simulated at {report.real_time_factor:.1f}x real time"
+    )
+    print(summary)
+    if args.report:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+    if failure is not None:
+        print(
+            f"error: simulation failed at t = {report.sim_time_s:.3f} s: {failure}", file=sys.stderr
+        )
+        return cli.EXIT_FAILED
+    return cli.EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(cli.run(main))

@@ -1,0 +1,154 @@
+"""Run the flipping robot and summarise what it did (the report of ``python -m drake_sim.flip``)."""
+
+import dataclasses as dc
+import math
+import time
+
+import numpy as np
+from pydrake.common import RandomGenerator
+from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+
+from diagrams.flip import make_flip_diagram
+from drake_sim.flip_controller import STATUS_FIELDS, FlipMode
+from drake_sim.flip_scenario import FlipScenario
+from drake_sim.robot_params import RobotParams
+
+
+@dc.dataclass
+class FlipReport:
+    """What a run did. Distances in m, times in s. See DESIGN.md for the contract."""
+
+    flips: int  # Completed half-turns over the axle.
+    failed_flips: int  # Attempts that fell back or timed out (each then recovered or not).
+    recoveries: int  # Times the controller rocked the robot free.
+    max_lateral_deviation_m: float  # Largest distance from the line the robot started on.
+    travel_extent_m: float  # Max minus min position along that line.
+    distance_travelled_m: float  # True path length of the axle's midpoint.
+    odometry_error_m: float  # Final distance between odometry and the true position.
+    max_odometry_error_m: float
+    naive_odometry_error_m: float  # The same for odometry that ignores flips.
+    max_naive_odometry_error_m: float
+    longest_time_without_flip_s: float  # Longest stretch between completed flips.
+    stuck: bool  # True if the robot was still recovering at the end.
+    finite: bool  # No NaN or infinity anywhere in the logged signals.
+    sim_time_s: float
+    wall_time_s: float
+    real_time_factor: float
+    seed: int
+
+    def to_dict(self) -> dict:
+        return dc.asdict(self)
+
+
+def summarize(
+    times: np.ndarray,
+    true_pose: np.ndarray,
+    odometry: np.ndarray,
+    naive: np.ndarray,
+    status: np.ndarray | None,
+) -> dict:
+    """Computes the report's motion figures from logged signals (one column per sample).
+
+    ``true_pose``, ``odometry`` and ``naive`` are 3 x N ``[x, y, yaw]``; ``status`` the flip
+    controller's status (``STATUS_FIELDS``) or None under teleop. The line is the one through
+    the first true position along the first true heading.
+    """
+    p = true_pose[:2]
+    direction = np.array([math.cos(true_pose[2, 0]), math.sin(true_pose[2, 0])])
+    offset = p - p[:, :1]
+    along = direction @ offset
+    across = direction[0] * offset[1] - direction[1] * offset[0]
+    odometry_error = np.linalg.norm(odometry[:2] - p, axis=0)
+    naive_error = np.linalg.norm(naive[:2] - p, axis=0)
+    figures = {
+        "max_lateral_deviation_m": float(np.max(np.abs(across))),
+        "travel_extent_m": float(np.ptp(along)),
+        "distance_travelled_m": float(np.sum(np.linalg.norm(np.diff(p, axis=1), axis=0))),
+        "odometry_error_m": float(odometry_error[-1]),
+        "max_odometry_error_m": float(np.max(odometry_error)),
+        "naive_odometry_error_m": float(naive_error[-1]),
+        "max_naive_odometry_error_m": float(np.max(naive_error)),
+        "flips": 0,
+        "failed_flips": 0,
+        "recoveries": 0,
+        "longest_time_without_flip_s": 0.0,
+        "stuck": False,
+    }
+    if status is not None:
+        fields = dict(zip(STATUS_FIELDS, status, strict=True))
+        flips = fields["flips"]
+        flip_times = np.concatenate([[times[0]], times[1:][np.diff(flips) > 0], [times[-1]]])
+        figures.update(
+            flips=int(flips[-1]),
+            failed_flips=int(fields["failed_flips"][-1]),
+            recoveries=int(fields["recoveries"][-1]),
+            longest_time_without_flip_s=float(np.max(np.diff(flip_times))),
+            stuck=bool(fields["mode"][-1] == FlipMode.RECOVER),
+        )
+    return figures
+
+
+class FlipRun:
+    """The flipping robot's diagram and simulator, ready to advance.
+
+    Args:
+        scenario: world, sensors and controllers.
+        robot: the robot's dimensions.
+        seed: the random seed (IMU noise); ``scenario.scene.random_seed`` when None.
+        meshcat: draw there (and pace at ``scenario.scene.simulator``'s real-time rate), or None
+            to run headless, flat out.
+        controller: "flip", "teleop" (Meshcat keys; needs ``meshcat``) or "cmd_vel" (fix or
+            connect the diagram's ``cmd_vel`` input); see ``diagrams.flip.CONTROLLERS``.
+    """
+
+    def __init__(
+        self,
+        scenario: FlipScenario,
+        robot: RobotParams,
+        *,
+        seed: int | None = None,
+        meshcat: Meshcat | None = None,
+        controller: str = "flip",
+    ):
+        self.seed = scenario.scene.random_seed if seed is None else seed
+        self.controller = controller
+        self.diagram = make_flip_diagram(scenario, robot, meshcat=meshcat, controller=controller)
+        self.simulator = Simulator(self.diagram)
+        if meshcat is not None:
+            ApplySimulatorConfig(scenario.scene.simulator, self.simulator)
+        self.context = self.simulator.get_mutable_context()
+        self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
+        self.simulator.Initialize()
+        self.wall_time = 0.0
+
+    def advance_to(self, t: float) -> None:
+        """Simulates until time ``t`` (s); wall time spent is added to ``wall_time``."""
+        start = time.perf_counter()
+        try:
+            self.simulator.AdvanceTo(t)
+        finally:
+            self.wall_time += time.perf_counter() - start
+
+    def log(self, name: str):
+        """The ``VectorLog`` of a logged signal (see ``diagrams.flip.LOGGED``)."""
+        return self.diagram.GetSubsystemByName(f"log_{name}").FindLog(self.context)
+
+    def report(self) -> FlipReport:
+        """Summarises the run so far."""
+        truth = self.log("true_pose")
+        data = {name: self.log(name).data() for name in ("odometry_pose", "naive_pose")}
+        status = self.log("status").data() if self.controller == "flip" else None
+        figures = summarize(
+            truth.sample_times(), truth.data(), data["odometry_pose"], data["naive_pose"], status
+        )
+        signals = [truth.data(), *data.values()] + ([status] if status is not None else [])
+        sim_time = self.context.get_time()
+        return FlipReport(
+            **figures,
+            finite=all(bool(np.all(np.isfinite(s))) for s in signals),
+            sim_time_s=sim_time,
+            wall_time_s=self.wall_time,
+            real_time_factor=sim_time / self.wall_time if self.wall_time > 0 else math.inf,
+            seed=self.seed,
+        )
