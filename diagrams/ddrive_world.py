@@ -2,6 +2,7 @@
 
 import dataclasses as dc
 import logging
+import math
 
 from pydrake.geometry import AddContactMaterial, HalfSpace, Meshcat, ProximityProperties, SceneGraph
 from pydrake.math import RigidTransform, RollPitchYaw
@@ -29,11 +30,14 @@ class DdriveWorld:
 
 
 def robot_start_pose(pose: PlanarPose, robot: RobotParams) -> RigidTransform:
-    """X_WB of the robot standing on its wheels and bottom caster at ``pose``.
+    """X_WB of the robot standing on its wheels and bottom caster at ``pose`` (or on its top
+    caster, turned over about its x axis, if ``pose.upside_down``).
 
     The body is lifted 1 mm so the first contact step does not start in penetration.
     """
-    return RigidTransform(RollPitchYaw(0, 0, pose.yaw), [pose.x, pose.y, robot.wheel.radius + 1e-3])
+    roll = math.pi if pose.upside_down else 0.0
+    p_WB = [pose.x, pose.y, robot.wheel.radius + 1e-3]
+    return RigidTransform(RollPitchYaw(roll, 0, pose.yaw), p_WB)
 
 
 class _HalfSpaceWarningFilter(logging.Filter):

@@ -17,8 +17,17 @@ from drake_sim.robot import BODY_LINK, LEFT_WHEEL_JOINT, RIGHT_WHEEL_JOINT
 from drake_sim.robot_params import RobotParams
 from drake_sim.teleop import MeshcatTeleop
 from drake_sim.trails import TrailVisualizer
+from drake_sim.wheel_drivers import make_wheel_drivers
 
-LOGGED = ("true_pose", "odometry_pose", "naive_pose", "status", "wheel_torques", "distance")
+LOGGED = (
+    "true_pose",
+    "odometry_pose",
+    "naive_pose",
+    "status",
+    "wheel_torques",
+    "wheel_state",
+    "distance",
+)
 """Signals logged every ``scenario.log_period``: the diagram has a ``log_<name>`` sink each."""
 
 
@@ -79,7 +88,8 @@ def make_flip_diagram(
     )
     builder.Connect(encoders.get_output_port(), odometry.GetInputPort("wheel_state"))
     builder.Connect(imu.GetOutputPort("imu"), odometry.GetInputPort("imu"))
-    builder.Connect(imu.GetOutputPort("delta_velocity"), odometry.GetInputPort("delta_velocity"))
+    for name in ("delta_velocity", "delta_angle"):
+        builder.Connect(imu.GetOutputPort(name), odometry.GetInputPort(name))
     truth = builder.AddNamedSystem("ground_truth", AxleGroundTruth(body=body, robot=robot))
     builder.Connect(plant.get_body_poses_output_port(), truth.GetInputPort("body_poses"))
 
@@ -90,10 +100,15 @@ def make_flip_diagram(
         )
         builder.Connect(imu.GetOutputPort("imu"), flipper.GetInputPort("imu"))
         builder.Connect(encoders.get_output_port(), flipper.GetInputPort("wheel_state"))
-        # One scalar torque, the same for both wheels.
-        fan_out = builder.AddNamedSystem("fan_out", MatrixGain(np.ones((2, 1))))
-        builder.Connect(flipper.GetOutputPort("wheel_torque"), fan_out.get_input_port())
-        torques = fan_out.get_output_port()
+        # One torque command for both wheels; their drivers keep them at the same speed.
+        drivers = builder.AddSystem(
+            make_wheel_drivers(robot, sync_response_time=scenario.flip.wheel_sync_response_time)
+        )
+        builder.Connect(
+            flipper.GetOutputPort("wheel_torque"), drivers.GetInputPort("torque_command")
+        )
+        builder.Connect(encoders.get_output_port(), drivers.GetInputPort("wheel_state"))
+        torques = drivers.GetOutputPort("wheel_torques")
         status = flipper.GetOutputPort("status")
     else:
         drive = builder.AddNamedSystem(

@@ -49,6 +49,9 @@ class FlipConfig:
     recover_pulse: float = 0.4  # s, length of each rocking pulse, alternating in direction.
     recover_timeout: float = 6.0  # s; then RECOVER starts over.
     response_time: float = 0.05  # s, time constant of the drive's wheel velocity loop.
+    # s, time constant of the wheel drivers' loop that keeps both wheels at the same speed
+    # (see drake_sim.wheel_drivers).
+    wheel_sync_response_time: float = 0.05
 
 
 # Layout of the discrete state.

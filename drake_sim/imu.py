@@ -59,6 +59,7 @@ class Imu(Diagram):
         output_ports:
         - imu
         - delta_velocity
+        - delta_angle
 
     Connect the inputs to the plant's ports of the same names (``plant_state`` is the plant's
     full state); ``add_imu`` does. The ``imu`` output's layout is given by ``QUATERNION``,
@@ -67,7 +68,9 @@ class Imu(Diagram):
     specific force integrated at every ``integration_period`` since the start, expressed in S
     (m/s), as many IMUs report it: differencing it gives the velocity change over any interval
     without missing the brief, large accelerations of an impact, which sampling the
-    acceleration at a low rate would alias. The noise is reproducible: seed it with
+    acceleration at a low rate would alias. ``delta_angle`` likewise integrates the measured
+    angular velocity (rad, in S): its change over a short interval is the rotation in it.
+    The noise is reproducible: seed it with
     ``diagram.SetRandomContext(context, RandomGenerator(seed))``.
     """
 
@@ -127,15 +130,17 @@ class Imu(Diagram):
         )
         builder.ExportInput(orientation.get_input_port(), "plant_state")
         builder.ExportOutput(measured.get_output_port(), "imu")
-        select_force = np.zeros((3, IMU_SIZE))
-        select_force[:, LINEAR_ACCELERATION] = np.eye(3)
-        force = builder.AddNamedSystem("measured_force", MatrixGain(select_force))
-        integrator = builder.AddNamedSystem(
-            "delta_velocity", DiscreteTimeIntegrator(3, integration_period)
-        )
-        builder.Connect(measured.get_output_port(), force.get_input_port())
-        builder.Connect(force.get_output_port(), integrator.get_input_port())
-        builder.ExportOutput(integrator.get_output_port(), "delta_velocity")
+        for name, part in (
+            ("delta_velocity", LINEAR_ACCELERATION),
+            ("delta_angle", ANGULAR_VELOCITY),
+        ):
+            select = np.zeros((3, IMU_SIZE))
+            select[:, part] = np.eye(3)
+            selected = builder.AddNamedSystem(f"{name}_input", MatrixGain(select))
+            integrator = builder.AddNamedSystem(name, DiscreteTimeIntegrator(3, integration_period))
+            builder.Connect(measured.get_output_port(), selected.get_input_port())
+            builder.Connect(selected.get_output_port(), integrator.get_input_port())
+            builder.ExportOutput(integrator.get_output_port(), name)
         builder.BuildInto(self)
 
 

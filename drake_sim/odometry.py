@@ -33,9 +33,15 @@ class OdometryConfig:
     """Rate and error growth of the wheel odometry."""
 
     rate: float = 100.0  # Hz.
-    # m/s: the wheels are taken to slip when their speed over ground differs from the IMU's
-    # prediction by more than this.
+    # The wheels are taken to slip when their speed over ground differs from the IMU's estimate
+    # by more than slip_speed (m/s), until it no longer does, or until their acceleration has
+    # matched the IMU's within slip_acceleration (m/s^2) for grip_time (s): gripping again.
     slip_speed: float = 0.15
+    slip_acceleration: float = 3.0
+    grip_time: float = 0.1
+    # s: the body's pitch about the axle is the integrated gyro, pulled towards the pitch of the
+    # IMU's (noisy) orientation with this time constant, so neither noise nor drift builds up.
+    pitch_time_constant: float = 0.5
     along_track_variance: float = 1e-4  # m^2 of variance added per metre travelled.
     cross_track_variance: float = 1e-4  # m^2 per metre travelled.
     yaw_variance: float = 2e-4  # rad^2 per metre travelled.
@@ -51,7 +57,10 @@ _COVARIANCE = slice(12, 21)  # 3x3 covariance of [x, y, yaw], row-major.
 _DELTA_V = slice(21, 24)  # The IMU's integrated specific force at the last update, m/s.
 _QUATERNION = slice(24, 28)  # The IMU's orientation at the last update.
 _SLIPPING = 28  # 1 while the wheels slip and the IMU carries the distance.
-_SIZE = 29
+_DELTA_ANGLE = slice(29, 32)  # The IMU's integrated angular velocity at the last update, rad.
+_WHEEL_SPEED = 32  # The wheels' speed over ground at the last update, m/s.
+_GRIP_TIME = 33  # How long the wheels' and the IMU's accelerations have agreed, s.
+_SIZE = 34
 
 
 class WheelOdometry(LeafSystem):
@@ -64,6 +73,7 @@ class WheelOdometry(LeafSystem):
         - wheel_state
         - imu
         - delta_velocity
+        - delta_angle
         output_ports:
         - pose
         - twist
@@ -72,8 +82,9 @@ class WheelOdometry(LeafSystem):
         - distance
         - slipping
 
-    ``wheel_state`` is ``[q_left, q_right, v_left, v_right]`` (rad, rad/s); ``imu`` and
-    ``delta_velocity`` are the ``Imu`` outputs, for an IMU on the axle's midpoint. ``pose`` and
+    ``wheel_state`` is ``[q_left, q_right, v_left, v_right]`` (rad, rad/s); ``imu``,
+    ``delta_velocity`` and ``delta_angle`` are the ``Imu`` outputs, for an IMU on the axle's
+    midpoint. ``pose`` and
     ``naive_pose`` are ``[x, y, yaw]``; ``twist`` is ``[v, omega]`` (m/s, rad/s);
     ``covariance`` the 9 entries of the 3x3 covariance of the pose, which grows with the
     distance travelled; ``distance`` the path length, m; ``slipping`` 1 while the IMU carries
@@ -88,6 +99,7 @@ class WheelOdometry(LeafSystem):
         self._wheels = self.DeclareVectorInputPort("wheel_state", 4)
         self._imu = self.DeclareVectorInputPort("imu", IMU_SIZE)
         self._delta_v = self.DeclareVectorInputPort("delta_velocity", 3)
+        self._delta_angle = self.DeclareVectorInputPort("delta_angle", 3)
         self._dt = 1.0 / config.rate
         initial = np.zeros(_SIZE)
         initial[_POSE] = initial_pose
@@ -122,6 +134,7 @@ class WheelOdometry(LeafSystem):
         imu = self._imu.Eval(context)
         x[_PREV] = [q[0], q[1], axle_yaw_and_pitch(rotation_from_imu(imu))[1]]
         x[_DELTA_V] = self._delta_v.Eval(context)
+        x[_DELTA_ANGLE] = self._delta_angle.Eval(context)
         x[_QUATERNION] = imu[QUATERNION]
 
     def _update(self, context, discrete_state):
@@ -132,39 +145,56 @@ class WheelOdometry(LeafSystem):
         R_WB = rotation_from_imu(imu)
         heading, pitch_now = axle_yaw_and_pitch(R_WB)
         q_l, q_r, prev_pitch = x[_PREV]
-        pitch = prev_pitch + wrap_angle(pitch_now - prev_pitch)
-        dq_l, dq_r, d_pitch = wheels[0] - q_l, wheels[1] - q_r, pitch - prev_pitch
-        x[_PREV] = [wheels[0], wheels[1], pitch]
+        # The pitch turned (about the axle, the body's y axis) since the last update: the gyro's,
+        # nudged towards the orientation's (unwrapped about the running estimate).
+        delta_angle = self._delta_angle.Eval(context)
+        d_angle_B = delta_angle - x[_DELTA_ANGLE]  # The body's rotation since, in its frame.
+        predicted = prev_pitch + d_angle_B[1]
+        measured = predicted + wrap_angle(pitch_now - predicted)
+        gain = self._dt / self._config.pitch_time_constant
+        d_pitch = d_angle_B[1] + gain * (measured - predicted)
+        x[_DELTA_ANGLE] = delta_angle
+        dq_l, dq_r = wheels[0] - q_l, wheels[1] - q_r
+        x[_PREV] = [wheels[0], wheels[1], prev_pitch + d_pitch]
         r, w = self._radius, self._separation
         # Each wheel turns, relative to the world, by its joint angle plus the body's pitch.
         d_left, d_right = r * (dq_l + d_pitch), r * (dq_r + d_pitch)
         ds_wheels, d_yaw = 0.5 * (d_left + d_right), (d_right - d_left) / w
-        ds = self._fuse_imu(x, context, imu, R_WB, heading, ds_wheels)
+        R_mean = 0.5 * (rotation_from_imu(np.r_[x[_QUATERNION], np.zeros(6)]) + R_WB)
+        ds = self._fuse_imu(x, context, imu, R_mean, heading, ds_wheels)
+        if x[_SLIPPING]:
+            d_yaw = float((R_mean @ d_angle_B)[2])  # Slipping wheels can't tell the turn.
         self._integrate(x, _POSE, ds, d_yaw)
         self._integrate(x, _NAIVE, 0.5 * r * (dq_l + dq_r), r * (dq_r - dq_l) / w)
         x[_DISTANCE] += abs(ds)
         x[_TWIST] = [x[_TWIST][0] if x[_SLIPPING] else ds_wheels / self._dt, d_yaw / self._dt]
         x[_COVARIANCE] = self._propagate(x[_COVARIANCE].reshape(3, 3), x[2], ds).ravel()
 
-    def _fuse_imu(self, x, context, imu, R_WB, heading, ds_wheels) -> float:
+    def _fuse_imu(self, x, context, imu, R_mean, heading, ds_wheels) -> float:
         """Returns the distance travelled since the last update (m): the wheels' unless they
-        slip, when the IMU's velocity change carries the speed. Updates the speed estimate
-        ``x[_TWIST][0]``, the slip flag and the IMU values kept for the next update."""
+        slip, when the IMU's velocity change carries the speed. ``R_mean`` is the mean of the
+        orientations at the last update and now. Updates the speed estimate ``x[_TWIST][0]``,
+        the slip flag and the IMU values kept for the next update."""
         dt = self._dt
         delta_v = self._delta_v.Eval(context)
-        R_prev = rotation_from_imu(np.concatenate([x[_QUATERNION], np.zeros(6)]))
         # The velocity change of the axle's midpoint over the update, in the world: the
         # specific force's integral turned by the mean orientation, plus gravity's share.
-        dv_W = 0.5 * (R_prev + R_WB) @ (delta_v - x[_DELTA_V]) + GRAVITY_W * dt
+        dv_W = R_mean @ (delta_v - x[_DELTA_V]) + GRAVITY_W * dt
         x[_DELTA_V] = delta_v
         x[_QUATERNION] = imu[QUATERNION]
         forward = np.array([np.cos(heading), np.sin(heading), 0.0])
+        dv_imu = float(dv_W @ forward)
         v_before = x[_TWIST][0]
-        v_imu = v_before + float(dv_W @ forward)
+        v_imu = v_before + dv_imu
         v_wheels = ds_wheels / dt
-        slipping = abs(v_wheels - v_imu) > self._config.slip_speed
-        x[_SLIPPING] = float(slipping)
-        if not slipping:
+        c = self._config
+        dv_wheels = v_wheels - x[_WHEEL_SPEED]
+        x[_WHEEL_SPEED] = v_wheels
+        agree = abs(dv_wheels - dv_imu) < c.slip_acceleration * dt
+        x[_GRIP_TIME] = x[_GRIP_TIME] + dt if agree else 0.0
+        gripping = abs(v_wheels - v_imu) <= c.slip_speed or x[_GRIP_TIME] >= c.grip_time
+        x[_SLIPPING] = 0.0 if gripping else 1.0
+        if gripping:
             x[_TWIST][0] = v_wheels
             return ds_wheels
         x[_TWIST][0] = v_imu

@@ -21,6 +21,7 @@ class PlanarPose:
     x: float = 0.0  # m, world x.
     y: float = 0.0  # m, world y.
     yaw: float = 0.0  # rad, about world z; 0 means the robot's wheels point along +x.
+    upside_down: bool = False  # Start on the top caster (turned over about the body's x axis).
 
 
 @dc.dataclass

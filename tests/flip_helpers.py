@@ -1,0 +1,33 @@
+"""Shared set-up for the flipping-robot tests: scenarios on bare ground, short runs."""
+
+import dataclasses as dc
+
+from drake_sim.flip_run import FlipRun
+from drake_sim.flip_scenario import FlipScenario, load_flip_scenario
+from drake_sim.resources import config_dir
+from drake_sim.robot import default_robot_file
+from drake_sim.robot_params import RobotParams, load_robot_params
+
+
+def default_robot() -> RobotParams:
+    return load_robot_params(default_robot_file())
+
+
+def flip_scenario(*, world: bool = False, upside_down: bool = False) -> FlipScenario:
+    """``config/flip.yaml``, on bare ground unless ``world`` (the street is slower to run)."""
+    scenario = load_flip_scenario(config_dir() / "flip.yaml")
+    scene = scenario.scene
+    pose = dc.replace(scene.robot_pose, upside_down=upside_down)
+    scene = dc.replace(scene, robot_pose=pose, world=scene.world if world else "")
+    return dc.replace(scenario, scene=scene)
+
+
+def run_for(seconds: float, *, robot=None, scenario=None, controller="flip", cmd_vel=None):
+    """Simulates ``seconds`` headless and returns the ``FlipRun``."""
+    run = FlipRun(
+        scenario or flip_scenario(), robot or default_robot(), controller=controller, seed=1
+    )
+    if cmd_vel is not None:
+        run.diagram.GetInputPort("cmd_vel").FixValue(run.context, cmd_vel)
+    run.advance_to(seconds)
+    return run
