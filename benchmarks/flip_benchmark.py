@@ -1,0 +1,52 @@
+"""Benchmark of the flipping robot: ``python benchmarks/flip_benchmark.py [--runs 3]``.
+
+Runs the default scenario (config/flip.yaml, config/ddrive.yaml) headless for 20 simulated
+seconds, several times, and prints each run's flips, lateral drift, odometry error and
+real-time factor, then their medians. Not a test: speeds depend on the machine.
+"""
+
+import argparse
+import os
+import platform
+import statistics
+
+from drake_sim.flip_run import FlipRun
+from drake_sim.flip_scenario import load_flip_scenario
+from drake_sim.resources import config_dir
+from drake_sim.robot import default_robot_file
+from drake_sim.robot_params import load_robot_params
+
+COLUMNS = (
+    ("flips", "flips", "{:.0f}"),
+    ("drift_m", "max_lateral_deviation_m", "{:.3f}"),
+    ("extent_m", "travel_extent_m", "{:.2f}"),
+    ("odom_err_m", "odometry_error_m", "{:.3f}"),
+    ("naive_err_m", "naive_odometry_error_m", "{:.3f}"),
+    ("distance_m", "distance_travelled_m", "{:.1f}"),
+    ("wall_s", "wall_time_s", "{:.2f}"),
+    ("rtf", "real_time_factor", "{:.1f}"),
+)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
+    args = parser.parse_args()
+    scenario = load_flip_scenario(config_dir() / "flip.yaml")
+    robot = load_robot_params(default_robot_file())
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
+    print(" ".join(f"{name:>12}" for name, _, _ in COLUMNS))
+    rows = []
+    for _ in range(args.runs):
+        run = FlipRun(scenario, robot)
+        run.advance_to(args.duration)
+        row = run.report().to_dict()
+        rows.append(row)
+        print(" ".join(f"{fmt.format(row[key]):>12}" for _, key, fmt in COLUMNS))
+    medians = {key: statistics.median(r[key] for r in rows) for _, key, _ in COLUMNS}
+    print(" ".join(f"{fmt.format(medians[key]):>12}" for _, key, fmt in COLUMNS), "(median)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,193 @@
+"""``python -m drake_sim.flip``: options, JSON report and exit codes (DESIGN.md)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+import drake_sim.flip as mut
+from drake_sim.robot import default_robot_file
+from tests.meshcat_html import scene_paths
+
+REPORT_KEYS = {
+    "flips",
+    "max_lateral_deviation_m",
+    "travel_extent_m",
+    "sim_time_s",
+    "wall_time_s",
+    "real_time_factor",
+    "odometry_error_m",
+}
+
+
+def _run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "drake_sim.flip", *args], capture_output=True, text=True, timeout=600
+    )
+
+
+def test_headless_report_and_record(tmp_path):
+    report_file, html = tmp_path / "out" / "report.json", tmp_path / "replay.html"
+    bare = tmp_path / "bare.yaml"
+    bare.write_text("scene: {world: ''}\n")
+    code = mut.main(
+        [
+            "--headless",
+            "--duration",
+            "3",
+            "--config",
+            str(bare),
+            "--seed",
+            "3",
+            "--report",
+            str(report_file),
+            "--record",
+            str(html),
+        ]
+    )
+    assert code == 0
+    report = json.loads(report_file.read_text())
+    assert report.keys() >= REPORT_KEYS
+    assert report["sim_time_s"] == pytest.approx(3.0)
+    assert report["seed"] == 3
+    assert report["flips"] >= 1
+    paths = scene_paths(html.read_text())
+    assert any("ddrive/base_link" in p for p in paths)
+    assert any(p.startswith("/odometry/") for p in paths)
+
+
+def test_seed_changes_only_the_noise(tmp_path):
+    bare = tmp_path / "bare.yaml"
+    bare.write_text("scene: {world: ''}\n")
+    reports = []
+    for seed in ("1", "1", "2"):
+        out = tmp_path / f"r{len(reports)}.json"
+        assert (
+            mut.main(
+                [
+                    "--headless",
+                    "--duration",
+                    "1",
+                    "--config",
+                    str(bare),
+                    "--seed",
+                    seed,
+                    "--report",
+                    str(out),
+                ]
+            )
+            == 0
+        )
+        reports.append(json.loads(out.read_text()))
+    assert reports[0]["odometry_error_m"] == reports[1]["odometry_error_m"]
+    assert reports[0]["odometry_error_m"] != reports[2]["odometry_error_m"]
+
+
+def test_set_overrides_a_value(tmp_path):
+    out = tmp_path / "r.json"
+    code = mut.main(
+        [
+            "--headless",
+            "--duration",
+            "1.5",
+            "--set",
+            "scene.world=''",
+            "--set",
+            "flip.drive_time=3.0",
+            "--report",
+            str(out),
+        ]
+    )
+    assert code == 0
+    assert json.loads(out.read_text())["flips"] == 0  # Still driving after 1.5 s.
+
+
+def _robot_file(tmp_path, edit):
+    data = yaml.safe_load(default_robot_file().read_text())
+    edit(data)
+    path = tmp_path / "robot.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "make_args, needle",
+    [
+        (
+            lambda p: ["--robot", str(_robot_file(p, lambda d: d["wheel"].pop("radius")))],
+            "wheel.radius",
+        ),
+        (
+            lambda p: ["--robot", str(_robot_file(p, lambda d: d["body"].update(length=0)))],
+            "body.length",
+        ),
+        (
+            lambda p: ["--robot", str(_robot_file(p, lambda d: d["body"].update(mass=-1)))],
+            "body.mass",
+        ),
+        (
+            lambda p: [
+                "--robot",
+                str(_robot_file(p, lambda d: d["motor"].update(max_torque=".nan"))),
+            ],
+            "max_torque",
+        ),
+        (
+            lambda p: [
+                "--robot",
+                str(_robot_file(p, lambda d: d["wheel"].update(width=float("nan")))),
+            ],
+            "wheel.width",
+        ),
+        (lambda p: ["--duration", "-2"], "duration"),
+        (lambda p: ["--seed", "-1"], "seed"),
+        (lambda p: ["--teleop"], "teleop"),
+        (lambda p: ["--set", "flip.drive_speed=fast"], "drive_speed"),
+        (lambda p: ["--set", "flip.drive_speed=-1"], "drive_speed"),
+        (lambda p: ["--set", "flip.no_such_key=1"], "no_such_key"),
+    ],
+    ids=[
+        "missing-key",
+        "zero",
+        "negative",
+        "nan-string",
+        "nan",
+        "negative-duration",
+        "negative-seed",
+        "teleop-headless",
+        "not-a-number",
+        "negative-speed",
+        "unknown-key",
+    ],
+)
+def test_bad_input_exits_2_with_one_line(tmp_path, make_args, needle):
+    result = _run("--headless", *make_args(tmp_path))
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert needle in lines[0]
+
+
+@pytest.mark.parametrize(
+    "text", ["scene: [1, 2", "flip: {drive_speed: .nan}", "imu: {rate: 0}", "nothing: 1"]
+)
+def test_bad_scenario_file_exits_2(tmp_path, text):
+    path = tmp_path / "flip.yaml"
+    path.write_text(text)
+    result = _run("--headless", "--config", str(path))
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in result.stderr
+
+
+def test_runs_as_a_module_and_exits_0(tmp_path):
+    out = tmp_path / "r.json"
+    result = _run(
+        "--headless", "--duration", "0.5", "--set", "scene.world=''", "--report", str(out)
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    assert "flips 0" in result.stdout
+    assert json.loads(out.read_text())["finite"] is True
