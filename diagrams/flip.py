@@ -90,8 +90,10 @@ def make_flip_diagram(
     builder.Connect(imu.GetOutputPort("imu"), odometry.GetInputPort("imu"))
     for name in ("delta_velocity", "delta_angle"):
         builder.Connect(imu.GetOutputPort(name), odometry.GetInputPort(name))
-    truth = builder.AddNamedSystem("ground_truth", AxleGroundTruth(body=body, robot=robot))
-    builder.Connect(plant.get_body_poses_output_port(), truth.GetInputPort("body_poses"))
+    truth = builder.AddNamedSystem(
+        "ground_truth", AxleGroundTruth(plant=plant, body=body, robot=robot)
+    )
+    builder.Connect(plant.get_state_output_port(), truth.GetInputPort("plant_state"))
 
     status = None
     if controller == "flip":

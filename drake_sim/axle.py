@@ -23,16 +23,13 @@ def axle_yaw_and_pitch(R_WB: np.ndarray) -> tuple[float, float]:
     wheel torque). If the axle is vertical (the robot lies on a wheel) both are ill-defined and
     the body's own heading and pitch 0 are returned.
     """
-    a = R_WB[:, 1]  # The axle, in the world.
-    f = np.array([a[1], -a[0], 0.0])  # a x z_W: horizontal, perpendicular to the axle.
-    norm = math.hypot(f[0], f[1])
+    (x0, a0, _), (x1, a1, _), (x2, _, _) = R_WB.tolist()  # Columns x_B and a = y_B.
+    norm = math.hypot(a0, a1)  # Of f = a x z_W: horizontal, perpendicular to the axle.
     if norm < 1e-6:
-        x = R_WB[:, 0]
-        return math.atan2(x[1], x[0]), 0.0
-    f /= norm
-    x_B = R_WB[:, 0]
-    pitch = math.atan2(-x_B[2], float(x_B @ f))
-    return math.atan2(f[1], f[0]), pitch
+        return math.atan2(x1, x0), 0.0
+    f0, f1 = a1 / norm, -a0 / norm
+    pitch = math.atan2(-x2, x0 * f0 + x1 * f1)
+    return math.atan2(f1, f0), pitch
 
 
 def up_sign(R_WB: np.ndarray) -> float:

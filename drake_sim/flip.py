@@ -107,7 +107,8 @@ def main(argv=None) -> int:
     )
     if meshcat is not None:
         pose = scenario.scene.robot_pose
-        meshcat.SetCameraPose([pose.x - 1.0, pose.y - 3.5, 1.6], [pose.x + 0.5, pose.y, 0.2])
+        meshcat.SetCameraPose([pose.x - 0.6, pose.y - 2.0, 1.1], [pose.x + 0.4, pose.y, 0.15])
+        meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
         if args.teleop:
             keys = ", ".join(label for label, _, _ in BUTTONS)
             print(f"teleop: click the Meshcat page, then use its buttons or keys: {keys}")

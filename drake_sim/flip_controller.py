@@ -136,11 +136,12 @@ class FlipController(LeafSystem):
         R_WB = rotation_from_imu(imu)
         _, pitch = axle_yaw_and_pitch(R_WB)
         up = R_WB[2, 2]
-        calm = np.linalg.norm(imu[ANGULAR_VELOCITY]) < c.settled_rate
+        calm = math.hypot(*imu[ANGULAR_VELOCITY]) < c.settled_rate
         flat = abs(up) > self._flat
         # The wheels' rotation rate relative to the world (joint rate plus the body's pitch
         # rate about the axle): the robot's speed over ground is this times the radius.
-        wheel_rate = float(np.mean(self._wheels.Eval(context)[2:4])) + imu[ANGULAR_VELOCITY][1]
+        wheels = self._wheels.Eval(context)
+        wheel_rate = 0.5 * (wheels[2] + wheels[3]) + imu[ANGULAR_VELOCITY][1]
         now = context.get_time()
         elapsed = now - x[_START]
         mode = FlipMode(int(x[_MODE]))

@@ -18,13 +18,19 @@ import dataclasses as dc
 import math
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import RigidBody
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_sim.axle import axle_yaw_and_pitch, wrap_angle
-from drake_sim.imu import GRAVITY_W, IMU_SIZE, QUATERNION, rotation_from_imu
+from drake_sim.imu import (
+    GRAVITY_W,
+    IMU_SIZE,
+    QUATERNION,
+    rotation_from_imu,
+    rotation_from_quaternion,
+)
 from drake_sim.robot_params import RobotParams
 
 
@@ -160,7 +166,7 @@ class WheelOdometry(LeafSystem):
         # Each wheel turns, relative to the world, by its joint angle plus the body's pitch.
         d_left, d_right = r * (dq_l + d_pitch), r * (dq_r + d_pitch)
         ds_wheels, d_yaw = 0.5 * (d_left + d_right), (d_right - d_left) / w
-        R_mean = 0.5 * (rotation_from_imu(np.r_[x[_QUATERNION], np.zeros(6)]) + R_WB)
+        R_mean = 0.5 * (rotation_from_quaternion(x[_QUATERNION]) + R_WB)
         ds = self._fuse_imu(x, context, imu, R_mean, heading, ds_wheels)
         if x[_SLIPPING]:
             d_yaw = float((R_mean @ d_angle_B)[2])  # Slipping wheels can't tell the turn.
@@ -225,26 +231,30 @@ class AxleGroundTruth(LeafSystem):
 
         name: AxleGroundTruth
         input_ports:
-        - body_poses
+        - plant_state
         output_ports:
         - pose
 
-    ``pose`` is ``[x, y, yaw]`` of the wheels' midpoint and the axle frame's heading.
+    ``plant_state`` is the plant's full state; ``pose`` is ``[x, y, yaw]`` of the wheels'
+    midpoint and the axle frame's heading.
     """
 
-    def __init__(self, *, body: RigidBody, robot: RobotParams):
+    def __init__(self, *, plant: MultibodyPlant, body: RigidBody, robot: RobotParams):
         super().__init__()
-        self._body_index = int(body.index())
+        if not body.is_floating_base_body():
+            raise ValueError(f"{body.name()} must be a floating base body")
+        start = body.floating_positions_start()  # [qw, qx, qy, qz, x, y, z] of the body.
+        self._quaternion = slice(start, start + 4)
+        self._position = slice(start + 4, start + 7)
         self._p_BA = np.array([robot.axle_x, 0.0, 0.0])
-        self._poses = self.DeclareAbstractInputPort(
-            "body_poses", AbstractValue.Make([RigidTransform()])
-        )
+        self._state = self.DeclareVectorInputPort("plant_state", plant.num_multibody_states())
         self.DeclareVectorOutputPort("pose", 3, self._calc_pose)
 
     def _calc_pose(self, context, output):
-        X_WB = self._poses.Eval(context)[self._body_index]
-        p_WA = X_WB.multiply(self._p_BA)
-        yaw, _ = axle_yaw_and_pitch(X_WB.rotation().matrix())
+        state = self._state.Eval(context)
+        R_WB = rotation_from_quaternion(state[self._quaternion])
+        p_WA = state[self._position] + R_WB @ self._p_BA
+        yaw, _ = axle_yaw_and_pitch(R_WB)
         output.SetFromVector([p_WA[0], p_WA[1], yaw])
 
 

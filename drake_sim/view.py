@@ -65,6 +65,7 @@ def main(argv=None) -> int:
     run = FlipRun(scenario, robot, meshcat=meshcat, controller="teleop")
     pose = scenario.scene.robot_pose
     meshcat.SetCameraPose([pose.x - 2.5, pose.y - 2.5, 1.5], [pose.x + 0.5, pose.y, 0.2])
+    meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
     print("drive: click the Meshcat page, then W/S faster forward/backward, A/D turn, Space stop")
     if args.record:
         meshcat.StartRecording()
