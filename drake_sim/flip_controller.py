@@ -26,8 +26,10 @@ class FlipMode(enum.IntEnum):
 
 @dc.dataclass
 class FlipConfig:
-    """Parameters of the flip controller. Torques are fractions of ``motor.max_torque`` or of
-    the torque that holds the body level about the axle, so one file suits robots of any size."""
+    """Parameters of the flip controller. Gains and torques are derived from the robot's
+    dimensions, masses and motor limit (speed-loop gains from the robot's inertia, the flip
+    torque from the body's weight moment about the axle), so one file suits robots of other
+    sizes."""
 
     rate: float = 100.0  # Hz, control rate.
     drive_speed: float = 0.8  # m/s, along the line, towards the wheels.
@@ -107,9 +109,15 @@ class FlipController(LeafSystem):
         self.DeclareVectorOutputPort("status", len(STATUS_FIELDS), self._calc_status, tickets)
 
     def _flip_torque(self, progress: float, progress_rate: float) -> float:
-        """Torque per wheel (N m, positive turns the body onward) that turns the body at the
-        flip rate: the body's weight moment, which resists until the body is over the axle and
-        helps after, plus a proportional pitch-rate loop. Half of it for each wheel."""
+        """The wheel torque (N m, each wheel; positive turns the body onward) whose reaction
+        turns the body over the axle at the flip rate: half of the body's weight moment about
+        the axle (it resists until the body is over the axle and helps after) plus half of a
+        proportional pitch-rate loop's torque, capped at the motor's maximum.
+
+        Args:
+            progress: how far the body has turned over the axle, rad (0 to pi).
+            progress_rate: how fast it turns onward, rad/s.
+        """
         body_torque = self._body_weight_moment * math.cos(progress)
         body_torque += self._flip_gain * (self._config.flip_rate - progress_rate)
         return float(np.clip(0.5 * body_torque, -self._max_torque, self._max_torque))

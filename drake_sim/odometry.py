@@ -90,8 +90,8 @@ class WheelOdometry(LeafSystem):
 
     ``wheel_state`` is ``[q_left, q_right, v_left, v_right]`` (rad, rad/s); ``imu``,
     ``delta_velocity`` and ``delta_angle`` are the ``Imu`` outputs, for an IMU on the axle's
-    midpoint. ``pose`` and
-    ``naive_pose`` are ``[x, y, yaw]``; ``twist`` is ``[v, omega]`` (m/s, rad/s);
+    midpoint. ``pose`` and ``naive_pose`` are ``[x, y, yaw]``; ``twist`` is ``[v, omega]``
+    (m/s, rad/s);
     ``covariance`` the 9 entries of the 3x3 covariance of the pose, which grows with the
     distance travelled; ``distance`` the path length, m; ``slipping`` 1 while the IMU carries
     the distance because the wheels slip, else 0.
@@ -167,27 +167,27 @@ class WheelOdometry(LeafSystem):
         d_left, d_right = r * (dq_l + d_pitch), r * (dq_r + d_pitch)
         ds_wheels, d_yaw = 0.5 * (d_left + d_right), (d_right - d_left) / w
         R_mean = 0.5 * (rotation_from_quaternion(x[_QUATERNION]) + R_WB)
-        ds = self._fuse_imu(x, context, imu, R_mean, heading, ds_wheels)
+        x[_QUATERNION] = imu[QUATERNION]
+        ds = self._fuse_imu(x, context, R_mean, heading, ds_wheels)
         if x[_SLIPPING]:
             d_yaw = float((R_mean @ d_angle_B)[2])  # Slipping wheels can't tell the turn.
         self._integrate(x, _POSE, ds, d_yaw)
         self._integrate(x, _NAIVE, 0.5 * r * (dq_l + dq_r), r * (dq_r - dq_l) / w)
         x[_DISTANCE] += abs(ds)
-        x[_TWIST] = [x[_TWIST][0] if x[_SLIPPING] else ds_wheels / self._dt, d_yaw / self._dt]
+        x[_TWIST][1] = d_yaw / self._dt
         x[_COVARIANCE] = self._propagate(x[_COVARIANCE].reshape(3, 3), x[2], ds).ravel()
 
-    def _fuse_imu(self, x, context, imu, R_mean, heading, ds_wheels) -> float:
+    def _fuse_imu(self, x, context, R_mean, heading, ds_wheels) -> float:
         """Returns the distance travelled since the last update (m): the wheels' unless they
         slip, when the IMU's velocity change carries the speed. ``R_mean`` is the mean of the
         orientations at the last update and now. Updates the speed estimate ``x[_TWIST][0]``,
-        the slip flag and the IMU values kept for the next update."""
+        the slip flag and the integrated specific force kept for the next update."""
         dt = self._dt
         delta_v = self._delta_v.Eval(context)
         # The velocity change of the axle's midpoint over the update, in the world: the
         # specific force's integral turned by the mean orientation, plus gravity's share.
         dv_W = R_mean @ (delta_v - x[_DELTA_V]) + GRAVITY_W * dt
         x[_DELTA_V] = delta_v
-        x[_QUATERNION] = imu[QUATERNION]
         forward = np.array([np.cos(heading), np.sin(heading), 0.0])
         dv_imu = float(dv_W @ forward)
         v_before = x[_TWIST][0]
