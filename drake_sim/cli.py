@@ -3,8 +3,10 @@
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 from drake_sim.errors import ConfigError
+from drake_sim.robot import default_robot_file
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -42,3 +44,20 @@ def positive_float(text: str) -> float:
     if not (value > 0 and value < float("inf")):
         raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
     return value
+
+
+def add_robot_and_config_options(parser: argparse.ArgumentParser, default_config: Path) -> None:
+    """Adds ``--robot FILE`` (default ``config/ddrive.yaml``) and ``--config FILE``."""
+    parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")
+    parser.add_argument("--config", type=Path, default=default_config, help="scenario YAML")
+
+
+def write_replay(meshcat, path: Path, *, recording: bool = True) -> None:
+    """Writes Meshcat's scene as a self-contained HTML file, with the recording (stopped and
+    published first) if ``recording``."""
+    if recording:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(meshcat.StaticHtml())
+    print(f"wrote {path}")

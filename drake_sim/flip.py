@@ -20,7 +20,6 @@ from drake_sim.errors import ConfigError
 from drake_sim.flip_run import FlipRun
 from drake_sim.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
 from drake_sim.resources import config_dir
-from drake_sim.robot import default_robot_file
 from drake_sim.robot_params import load_robot_params
 from drake_sim.teleop import BUTTONS
 
@@ -39,10 +38,7 @@ def _non_negative_int(text: str) -> int:
 
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.flip", description=__doc__.split("\n")[0])
-    parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")
-    parser.add_argument(
-        "--config", type=Path, default=config_dir() / "flip.yaml", help="scenario YAML"
-    )
+    cli.add_robot_and_config_options(parser, config_dir() / "flip.yaml")
     parser.add_argument(
         "--duration",
         type=cli.positive_float,
@@ -123,10 +119,7 @@ def main(argv=None) -> int:
         failure = str(e).strip().splitlines()[0]
     finally:
         if args.record:
-            meshcat.StopRecording()
-            meshcat.PublishRecording()
-            args.record.parent.mkdir(parents=True, exist_ok=True)
-            args.record.write_text(meshcat.StaticHtml())
+            cli.write_replay(meshcat, args.record)
     report = run.report()
     summary = (
         f"flips {report.flips} (failed {report.failed_flips}, recovered {report.recoveries}), "

@@ -18,16 +18,12 @@ from drake_sim import cli
 from drake_sim.flip_run import FlipRun
 from drake_sim.flip_scenario import load_flip_scenario
 from drake_sim.resources import config_dir
-from drake_sim.robot import default_robot_file
 from drake_sim.robot_params import load_robot_params
 
 
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.view", description=__doc__.split("\n")[0])
-    parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")
-    parser.add_argument(
-        "--config", type=Path, default=config_dir() / "view.yaml", help="world scenario YAML"
-    )
+    cli.add_robot_and_config_options(parser, config_dir() / "view.yaml")
     parser.add_argument(
         "--view-only", action="store_true", help="the robot alone, with joint sliders"
     )
@@ -41,12 +37,6 @@ def _parse_args(argv):
     return parser.parse_args(argv)
 
 
-def _write_html(meshcat, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(meshcat.StaticHtml())
-    print(f"wrote {path}")
-
-
 def main(argv=None) -> int:
     args = _parse_args(argv)
     robot = load_robot_params(args.robot)
@@ -57,7 +47,7 @@ def main(argv=None) -> int:
         meshcat.SetCameraPose([1.0, -1.2, 0.6], [0.0, 0.0, robot.wheel.radius])
         sliders.Run(diagram, timeout=args.duration)
         if args.record:
-            _write_html(meshcat, args.record)
+            cli.write_replay(meshcat, args.record, recording=False)
         return cli.EXIT_OK
 
     scenario = load_flip_scenario(args.config)
@@ -73,9 +63,7 @@ def main(argv=None) -> int:
         run.advance_to(args.duration if args.duration is not None else np.inf)
     finally:
         if args.record:
-            meshcat.StopRecording()
-            meshcat.PublishRecording()
-            _write_html(meshcat, args.record)
+            cli.write_replay(meshcat, args.record)
     print(f"simulated {run.context.get_time():.2f} s in {run.wall_time:.2f} s wall time")
     return cli.EXIT_OK
 

@@ -4,10 +4,9 @@ import subprocess
 import sys
 
 import pytest
-import yaml
 
 import drake_sim.view as mut
-from drake_sim.robot import default_robot_file
+from tests.cli_helpers import assert_bad_input, edited_robot_file
 from tests.meshcat_html import scene_paths
 
 
@@ -45,22 +44,6 @@ def test_view_only_runs_with_sliders(tmp_path):
     assert not any("barrier" in p for p in paths)  # the robot alone
 
 
-def _robot_file(tmp_path, edit):
-    data = yaml.safe_load(default_robot_file().read_text())
-    edit(data)
-    path = tmp_path / "robot.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return path
-
-
-def _assert_bad_input(result, needle):
-    assert result.returncode == 2, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1, result.stderr
-    assert needle in lines[0]
-    assert "Traceback" not in result.stderr
-
-
 @pytest.mark.parametrize(
     "edit, needle",
     [
@@ -73,16 +56,16 @@ def _assert_bad_input(result, needle):
     ids=["missing-key", "zero", "negative", "non-number", "nan"],
 )
 def test_bad_robot_file_is_one_line_and_exit_2(tmp_path, edit, needle):
-    _assert_bad_input(
-        _run("--robot", str(_robot_file(tmp_path, edit)), "--duration", "0.01"), needle
+    assert_bad_input(
+        _run("--robot", str(edited_robot_file(tmp_path, edit)), "--duration", "0.01"), needle
     )
 
 
-def test_malformed_or_missing_robot_file(tmp_path):
+def test_malformed_or_missingedited_robot_file(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("body: {length: [")
-    _assert_bad_input(_run("--robot", str(bad)), "malformed")
-    _assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "cannot read")
+    assert_bad_input(_run("--robot", str(bad)), "malformed")
+    assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "cannot read")
 
 
 @pytest.mark.parametrize(
@@ -94,14 +77,14 @@ def test_malformed_or_missing_robot_file(tmp_path):
     ],
 )
 def test_bad_options(args, needle):
-    _assert_bad_input(_run(*args), needle)
+    assert_bad_input(_run(*args), needle)
 
 
 def test_bad_scenario_file(tmp_path):
     scenario = tmp_path / "scenario.yaml"
     scenario.write_text("scene: {world: package://drake_sim_models/worlds/nowhere.sdf}\n")
-    _assert_bad_input(_run("--config", str(scenario)), "nowhere.sdf")
+    assert_bad_input(_run("--config", str(scenario)), "nowhere.sdf")
     scenario.write_text("scene: {robot_pose: {x: .nan}}\n")
-    _assert_bad_input(_run("--config", str(scenario)), "robot_pose.x")
+    assert_bad_input(_run("--config", str(scenario)), "robot_pose.x")
     scenario.write_text("scene: {robot_pos: {x: 1}}\n")
-    _assert_bad_input(_run("--config", str(scenario)), "robot_pos")
+    assert_bad_input(_run("--config", str(scenario)), "robot_pos")
