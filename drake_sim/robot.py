@@ -10,7 +10,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
 from drake_sim.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
-from drake_sim.robot_params import RobotParams, load_robot_params
+from drake_sim.robot_params import RobotParams
 
 ROBOT_XACRO = "ddrive/ddrive.urdf.xacro"
 """The robot's xacro, relative to ``models/``."""
@@ -49,12 +49,6 @@ def add_robot(
     parser.SetAutoRenaming(False)
     urdf = robot_urdf(params).read_text()
     (instance,) = parser.AddModelsFromString(
-        urdf.replace('name="ddrive"', f'name="{name}"', 1), "urdf"
+        urdf.replace('<robot name="ddrive"', f'<robot name="{name}"', 1), "urdf"
     )
     return instance
-
-
-def load_and_render(robot_file: str | Path | None = None) -> tuple[RobotParams, Path]:
-    """Loads and validates a robot YAML (default ``config/ddrive.yaml``) and renders its URDF."""
-    params = load_robot_params(robot_file or default_robot_file())
-    return params, robot_urdf(params)
