@@ -63,7 +63,7 @@ def add_table(plant: MultibodyPlant, table: TableConfig) -> None:
     shape = Box(*table.size)
     world = plant.world_body()
     plant.RegisterCollisionGeometry(world, X_WT, shape, "table", CoulombFriction(0.8, 0.6))
-    plant.RegisterVisualGeometry(world, X_WT, shape, "table", Rgba(0.55, 0.4, 0.25, 1.0))
+    plant.RegisterVisualGeometry(world, X_WT, shape, "table", Rgba(0.55, 0.4, 0.25, 1.0).rgba)
 
 
 def disabled_collision_pairs(config: PandaModelConfig) -> list[tuple[str, str]]:

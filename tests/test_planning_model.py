@@ -142,3 +142,24 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
         v == scene.is_collision_free(q) for v, q in zip(violations[True], qs, strict=True)
     )
     assert disagree <= 2
+
+
+def test_add_table_has_its_top_at_zero():
+    from pydrake.geometry import Role
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.systems.framework import DiagramBuilder
+
+    from planning.config import load_panda_config
+    from planning.panda_model import add_table
+
+    table = load_panda_config().table
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
+    add_table(plant, table)
+    plant.Finalize()
+    inspector = scene_graph.model_inspector()
+    frame = plant.GetBodyFrameIdOrThrow(plant.world_body().index())
+    for role in (Role.kProximity, Role.kIllustration):
+        (geometry,) = inspector.GetGeometries(frame, role)
+        z_top = inspector.GetPoseInFrame(geometry).translation()[2] + table.size[2] / 2
+        assert abs(z_top) < 1e-12
