@@ -98,7 +98,8 @@ def main(argv=None) -> int:
         scenario,
         robot,
         seed=args.seed,
-        meshcat=meshcat if viewer or args.record else None,
+        meshcat=meshcat,
+        realtime=viewer,
         controller="teleop" if args.teleop else "flip",
     )
     if meshcat is not None:

@@ -96,8 +96,9 @@ class FlipRun:
         scenario: world, sensors and controllers.
         robot: the robot's dimensions.
         seed: the random seed (IMU noise); ``scenario.scene.random_seed`` when None.
-        meshcat: draw there (and pace at ``scenario.scene.simulator``'s real-time rate), or None
-            to run headless, flat out.
+        meshcat: draw there, or None to run headless.
+        realtime: pace the run with ``scenario.scene.simulator`` (its real-time rate); by
+            default, when there is a ``meshcat``. Otherwise it runs flat out.
         controller: "flip", "teleop" (Meshcat keys; needs ``meshcat``) or "cmd_vel" (fix or
             connect the diagram's ``cmd_vel`` input); see ``diagrams.flip.CONTROLLERS``.
     """
@@ -109,13 +110,16 @@ class FlipRun:
         *,
         seed: int | None = None,
         meshcat: Meshcat | None = None,
+        realtime: bool | None = None,
         controller: str = "flip",
     ):
         self.seed = scenario.scene.random_seed if seed is None else seed
         self.controller = controller
         self.diagram = make_flip_diagram(scenario, robot, meshcat=meshcat, controller=controller)
         self.simulator = Simulator(self.diagram)
-        if meshcat is not None:
+        if realtime is None:
+            realtime = meshcat is not None
+        if realtime:
             ApplySimulatorConfig(scenario.scene.simulator, self.simulator)
         self.context = self.simulator.get_mutable_context()
         self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
