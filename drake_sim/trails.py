@@ -22,13 +22,17 @@ class TrailVisualizer(LeafSystem):
         - true_pose
 
     Both inputs are ``[x, y, yaw]``. The trails are sampled every ``period`` seconds into
-    abstract state; with a recording running, the arrow's motion is recorded too.
+    abstract state and keep the last ``max_points`` samples (every sample is sent to the
+    browser at each redraw); with a recording running, the arrow's motion is recorded too.
     """
 
-    def __init__(self, *, meshcat: Meshcat, period: float, height: float = 0.01):
+    def __init__(
+        self, *, meshcat: Meshcat, period: float, height: float = 0.01, max_points: int = 3000
+    ):
         super().__init__()
         self._meshcat = meshcat
         self._height = height
+        self._max_points = max_points
         self._odometry = self.DeclareVectorInputPort("odometry_pose", 3)
         self._truth = self.DeclareVectorInputPort("true_pose", 3)
         self._trails = self.DeclareAbstractState(AbstractValue.Make(np.zeros((0, 6))))
@@ -43,7 +47,8 @@ class TrailVisualizer(LeafSystem):
     def _sample(self, context, state):
         trails = context.get_abstract_state(self._trails).get_value()
         row = np.concatenate([self._odometry.Eval(context), self._truth.Eval(context)])
-        state.get_mutable_abstract_state(self._trails).set_value(np.vstack([trails, row]))
+        trails = np.vstack([trails[-(self._max_points - 1) :], row])
+        state.get_mutable_abstract_state(self._trails).set_value(trails)
 
     def _draw(self, context):
         trails = context.get_abstract_state(self._trails).get_value()
