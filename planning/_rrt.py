@@ -1,0 +1,324 @@
+"""Joint-space path planning on Drake's collision checker: RRT-Connect, shortcutting, checks.
+
+All paths here are arrays of shape (N, 7): arm joint waypoints (rad) whose straight-line
+interpolation is the path; the fingers stay at the scene's positions. Collision queries go to
+the scene's ``SceneGraphCollisionChecker`` (so objects added at run time are seen):
+``CheckEdgeCollisionFree`` at the checker's edge step while searching, and
+``CheckConfigsCollisionFree`` (parallel over both cores) at a fine step to validate.
+
+References:
+    J. Kuffner, S. LaValle, "RRT-Connect: An efficient approach to single-query path
+    planning", ICRA 2000.
+    R. Geraerts, M. Overmars, "Creating high-quality paths for motion planning", IJRR 2007
+    (random shortcutting).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+_SHORT_EDGE_STEPS = 12  # edges of at most this many steps are checked by Drake in one call
+_CHUNK = 8  # configurations per parallel batch when checking long edges
+
+
+def _bisection_order(n: int) -> np.ndarray:
+    """Returns the n + 1 fractions k / n, k = 0..n, ordered coarse to fine (end points first)."""
+    order, seen = [n, 0], {0, n}
+    width = n
+    while len(order) < n + 1:
+        width = max(1, width // 2)
+        for k in range(width, n, width):
+            if k not in seen:
+                seen.add(k)
+                order.append(k)
+    return np.asarray(order, dtype=float) / max(n, 1)
+
+
+class CheckerAdapter:
+    """7-joint collision queries on a ``PlanningScene``'s checker (fingers from the scene).
+
+    Args:
+        scene: the planning scene.
+        resolution: when given, edges are checked by sampling at this joint-space step (rad,
+            in parallel) instead of at the checker's own edge step.
+    """
+
+    def __init__(self, scene, resolution: float | None = None):
+        self._resolution = resolution
+        self._proven: set[bytes] = set()  # edges found free at ``resolution``
+        self._checker = scene.checker
+        self._template = scene.full_q(np.zeros(7))
+        self._arm = scene.model.arm_indices
+        idx = self._arm
+        self.lower = scene.plant.GetPositionLowerLimits()[idx].copy()
+        self.upper = scene.plant.GetPositionUpperLimits()[idx].copy()
+
+    def full(self, q) -> np.ndarray:
+        full = self._template.copy()
+        full[self._arm] = q
+        return full
+
+    def config_free(self, q) -> bool:
+        return self._checker.CheckConfigCollisionFree(self.full(q))
+
+    def edge_free(self, q_a, q_b) -> bool:
+        """True when the segment is collision-free at the edge step (the checker's, or
+        ``resolution``). Short edges go to Drake's ``CheckEdgeCollisionFree`` (end first, then
+        in order); long ones are sampled coarse to fine (bisection order) and checked in
+        parallel chunks, so a colliding long edge (a typical shortcut attempt) fails after a
+        few checks instead of after the free part before the obstacle."""
+        step = self._resolution or self._checker.edge_step_size()
+        n = int(np.ceil(np.linalg.norm(q_b - q_a) / step))
+        if n <= _SHORT_EDGE_STEPS and self._resolution is None:
+            return self._checker.CheckEdgeCollisionFree(self.full(q_a), self.full(q_b))
+        if self._resolution is not None:
+            if self.is_proven(q_a, q_b):
+                return True
+            # A cheap coarse pass first: most failing candidates fail there.
+            if not self._checker.CheckEdgeCollisionFree(self.full(q_a), self.full(q_b)):
+                return False
+        t = _bisection_order(n)
+        samples = q_a + t[:, None] * (q_b - q_a)
+        chunk = _CHUNK
+        for start in range(0, len(samples), chunk):
+            if not self.configs_free(samples[start : start + chunk]).all():
+                return False
+            chunk *= 2  # the edge looks free: larger batches, fewer calls
+        if self._resolution is not None:
+            self._proven.add(_edge_key(q_a, q_b))
+        return True
+
+    @property
+    def resolution(self) -> float | None:
+        return self._resolution
+
+    def is_proven(self, q_a, q_b) -> bool:
+        """True when this adapter has already found the edge free at its resolution."""
+        return _edge_key(q_a, q_b) in self._proven
+
+    def mark_proven(self, q_a, q_b) -> None:
+        self._proven.add(_edge_key(q_a, q_b))
+
+    def configs_free(self, qs) -> np.ndarray:
+        """Checks many configurations (rows of qs) in parallel; returns a bool array."""
+        full = np.tile(self._template, (len(qs), 1))
+        full[:, self._arm] = qs
+        return np.asarray(self._checker.CheckConfigsCollisionFree(list(full)), dtype=bool)
+
+
+def densify(path: np.ndarray, resolution: float) -> tuple[np.ndarray, np.ndarray]:
+    """Interpolates a path so that consecutive configurations are at most ``resolution`` apart.
+
+    Args:
+        path: (N, 7) waypoints, rad.
+        resolution: largest joint-space L2 distance between consecutive samples, rad.
+
+    Returns:
+        (samples, segment): the samples (M, 7), first and last waypoints included, and the index
+        of the path segment each sample lies on.
+    """
+    samples, segment = [path[:1]], [0]
+    for i in range(len(path) - 1):
+        n = max(1, int(np.ceil(np.linalg.norm(path[i + 1] - path[i]) / resolution)))
+        s = np.arange(1, n + 1)[:, None] / n
+        samples.append(path[i] + s * (path[i + 1] - path[i]))
+        segment.extend([i] * n)
+    return np.vstack(samples), np.asarray(segment)
+
+
+def _edge_key(q_a, q_b) -> bytes:
+    return np.concatenate([q_a, q_b]).tobytes()
+
+
+def first_invalid_segment(adapter: CheckerAdapter, path: np.ndarray, resolution: float):
+    """Returns the index of the first segment with a collision at ``resolution``, or None.
+
+    Segments the adapter has already found free at that resolution are not checked again;
+    the others are checked in one parallel batch (and remembered when free).
+    """
+    reuse = adapter.resolution == resolution
+    todo = [
+        i for i in range(len(path) - 1) if not (reuse and adapter.is_proven(path[i], path[i + 1]))
+    ]
+    if not todo:
+        return None
+    pieces = [densify(path[i : i + 2], resolution)[0] for i in todo]
+    free = adapter.configs_free(np.vstack(pieces))
+    bad, offset = None, 0
+    for i, piece in zip(todo, pieces, strict=True):
+        ok = free[offset : offset + len(piece)].all()
+        offset += len(piece)
+        if not ok and bad is None:
+            bad = i
+        elif ok and reuse:
+            adapter.mark_proven(path[i], path[i + 1])
+    return bad
+
+
+def path_length(path: np.ndarray) -> float:
+    """Joint-space L2 length of a piecewise-linear path, rad."""
+    return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()) if len(path) > 1 else 0.0
+
+
+class _Tree:
+    def __init__(self, root: np.ndarray, capacity: int = 1024):
+        self.q = np.empty((capacity, root.size))
+        self.parent = np.empty(capacity, dtype=int)
+        self.q[0], self.parent[0], self.size = root, -1, 1
+
+    def add(self, q: np.ndarray, parent: int) -> int:
+        if self.size == len(self.q):
+            self.q = np.vstack([self.q, np.empty_like(self.q)])
+            self.parent = np.concatenate([self.parent, np.empty_like(self.parent)])
+        self.q[self.size], self.parent[self.size] = q, parent
+        self.size += 1
+        return self.size - 1
+
+    def nearest(self, q: np.ndarray) -> int:
+        d = self.q[: self.size] - q
+        return int(np.argmin(np.einsum("ij,ij->i", d, d)))
+
+    def branch(self, index: int) -> list[np.ndarray]:
+        """Configurations from the root to ``index``."""
+        out = []
+        while index >= 0:
+            out.append(self.q[index])
+            index = self.parent[index]
+        return out[::-1]
+
+
+def rrt_connect(
+    adapter: CheckerAdapter,
+    q_start: np.ndarray,
+    q_goal: np.ndarray,
+    *,
+    step: float,
+    goal_bias: float,
+    deadline: float,
+    rng: np.random.Generator,
+    max_iterations: int = 100_000,
+) -> np.ndarray | None:
+    """Plans a collision-free path with RRT-Connect; both ends must be collision-free.
+
+    Args:
+        adapter: collision queries.
+        q_start, q_goal: the 7 arm joints at either end, rad.
+        step: largest extension of a tree per step, rad (joint-space L2).
+        goal_bias: probability of sampling the other tree's root instead of a random q.
+        deadline: ``time.perf_counter()`` value at which to give up.
+        rng: the random generator.
+        max_iterations: samples before giving up.
+
+    Returns:
+        (N, 7) waypoints from q_start to q_goal, or None when none was found in time.
+    """
+    trees = [_Tree(np.asarray(q_start, float)), _Tree(np.asarray(q_goal, float))]
+    for iteration in range(max_iterations):
+        if time.perf_counter() > deadline:
+            return None
+        a, b = trees[iteration % 2], trees[(iteration + 1) % 2]
+        target = b.q[0] if rng.random() < goal_bias else rng.uniform(adapter.lower, adapter.upper)
+        new = _extend(adapter, a, target, step)
+        if new is None:
+            continue
+        reached = _connect(adapter, b, a.q[new], step)
+        if reached is None:
+            continue
+        branch_a, branch_b = a.branch(new), b.branch(reached)
+        path = np.asarray(branch_a + branch_b[::-1])  # the meeting point appears twice
+        if iteration % 2 == 1:
+            path = path[::-1]
+        return _drop_duplicates(path)
+    return None
+
+
+def _extend(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None:
+    near = tree.nearest(target)
+    q_near = tree.q[near]
+    delta = target - q_near
+    dist = float(np.linalg.norm(delta))
+    if dist < 1e-9:
+        return None
+    q_new = target if dist <= step else q_near + delta * (step / dist)
+    if not adapter.edge_free(q_near, q_new):
+        return None
+    return tree.add(q_new, near)
+
+
+def _connect(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None:
+    """Extends ``tree`` towards target until it gets there (returns the node) or is blocked."""
+    index = tree.nearest(target)
+    while True:
+        q_near = tree.q[index]
+        delta = target - q_near
+        dist = float(np.linalg.norm(delta))
+        if dist < 1e-9:
+            return index
+        q_new = target if dist <= step else q_near + delta * (step / dist)
+        if not adapter.edge_free(q_near, q_new):
+            return None
+        index = tree.add(q_new, index)
+        if dist <= step:
+            return index
+
+
+def _drop_duplicates(path: np.ndarray) -> np.ndarray:
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-12])
+    return path[keep]
+
+
+def shortcut(
+    adapter: CheckerAdapter,
+    path: np.ndarray,
+    *,
+    iterations: int,
+    deadline: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Shortens a collision-free path: greedy vertex skipping, then random shortcuts.
+
+    The greedy pass joins each waypoint to the farthest later waypoint it sees in a straight
+    line; the random pass picks two points along the path (by arc length) and replaces the part
+    between them by a straight segment when that is collision-free.
+
+    Returns:
+        the shorter path (the input when nothing helped), same ends.
+    """
+    path = _greedy(adapter, path, deadline)
+    for _ in range(iterations):
+        if len(path) < 3 or time.perf_counter() > deadline:
+            break
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+        s_a, s_b = np.sort(rng.uniform(0.0, cum[-1], 2))
+        i, j = np.searchsorted(cum, s_a, "right") - 1, np.searchsorted(cum, s_b, "right") - 1
+        if i == j:
+            continue
+        q_a = _point(path, cum, i, s_a)
+        q_b = _point(path, cum, j, s_b)
+        if not adapter.edge_free(q_a, q_b):
+            continue
+        new = np.vstack([path[: i + 1], q_a, q_b, path[j + 1 :]])
+        if path_length(new) < path_length(path) - 1e-9:
+            path = _drop_duplicates(new)
+    return _greedy(adapter, path, deadline)
+
+
+def _point(path, cum, i, s) -> np.ndarray:
+    length = cum[i + 1] - cum[i]
+    t = 0.0 if length <= 0 else (s - cum[i]) / length
+    return path[i] + t * (path[i + 1] - path[i])
+
+
+def _greedy(adapter, path: np.ndarray, deadline: float) -> np.ndarray:
+    out, i = [path[0]], 0
+    while i < len(path) - 1:
+        j = len(path) - 1
+        while j > i + 1 and (
+            time.perf_counter() > deadline or not adapter.edge_free(path[i], path[j])
+        ):
+            j -= 1
+        out.append(path[j])
+        i = j
+    return np.asarray(out)

@@ -1,0 +1,363 @@
+"""MotionPlanner: joint, named, pose and Cartesian goals on a ``PlanningScene``.
+
+Every request checks its start and goal (limits, finite values, collisions naming the bodies),
+then finds a joint path: the straight line when it is collision-free, else RRT-Connect on the
+scene's ``SceneGraphCollisionChecker`` followed by shortcutting (``planning._rrt``). Every path is
+re-checked at ``validation_resolution`` (0.01 rad) before it is returned; a segment failing that
+check is re-planned with edges checked at that resolution. The path is then timed rest to rest
+within the scaled velocity and acceleration limits (``planning._retime``) into a ``Plan``.
+
+Requests start from the planner's ``RobotState`` (its current q; MoveIt's "current state")
+unless given ``q_start``. Failures raise ``PlanningError`` with a code; a Cartesian path that
+is only partly achievable is returned with ``success=False`` and the fraction achieved.
+"""
+
+import dataclasses as dc
+import time
+
+import numpy as np
+from pydrake.math import RigidTransform, RotationMatrix
+
+from planning._cartesian import cartesian_path
+from planning._planner_options import (
+    MotionPlannerOptions,
+    check_options,
+    load_planner_options,
+)
+from planning._rrt import (
+    CheckerAdapter,
+    first_invalid_segment,
+    path_length,
+    rrt_connect,
+    shortcut,
+)
+from planning.errors import ErrorCode, PlanningError
+from planning.plan import Plan, describe_scene
+from planning.robot_state import RobotState
+
+
+@dc.dataclass
+class PlanResult:
+    """The outcome of a request.
+
+    Attributes:
+        success: true when the whole request was met with a validated path.
+        trajectory: the timed ``Plan`` (for a partial Cartesian path, the part achieved).
+        code: None on success, else the ``ErrorCode``.
+        message: what happened.
+        planning_time: wall time from request to validated path, s.
+        fraction: share of a Cartesian path achieved (1 for other requests).
+    """
+
+    success: bool
+    trajectory: Plan | None
+    code: ErrorCode | None = None
+    message: str = ""
+    planning_time: float = 0.0
+    fraction: float = 1.0
+
+    @property
+    def plan(self) -> Plan | None:
+        return self.trajectory
+
+
+class MotionPlanner:
+    """Plans collision-free motions of the Panda in a ``PlanningScene``.
+
+    Args:
+        scene: the planning scene (robot, objects, collision checker).
+        options: planner options; ``config/planner.yaml`` when None.
+        state: the current state requests start from; ``RobotState(scene)`` ("ready") when None.
+    """
+
+    def __init__(self, scene, options: MotionPlannerOptions | None = None, *, state=None):
+        self._scene = scene
+        self._options = options if options is not None else load_planner_options()
+        check_options(self._options)
+        self._state = state if state is not None else RobotState(scene)
+
+    @property
+    def scene(self):
+        return self._scene
+
+    @property
+    def options(self) -> MotionPlannerOptions:
+        return self._options
+
+    @property
+    def state(self) -> RobotState:
+        return self._state
+
+    # ------------------------------------------------------------------------ requests ----
+    def plan_to_joints(self, q_goal, *, q_start=None, timeout: float | None = None) -> PlanResult:
+        """Plans to a joint configuration (7 arm joints in rad, or 9 with the fingers).
+
+        Raises:
+            PlanningError: INVALID_START, START_IN_COLLISION, INVALID_GOAL, GOAL_IN_COLLISION,
+                PLANNING_FAILED or TIMED_OUT.
+        """
+        t0 = time.perf_counter()
+        deadline = t0 + (timeout or self._options.timeout)
+        q_start = self._check_start(q_start)
+        q_goal = self._check_goal(q_goal)
+        path, how = self._find_path(q_start, q_goal, deadline)
+        return self._result(path, how, t0)
+
+    def plan_to_named(self, name: str, *, q_start=None, timeout: float | None = None):
+        """Plans to a named configuration of ``config/panda.yaml`` or the SRDF (e.g. "ready")."""
+        return self.plan_to_joints(self._state.named(name), q_start=q_start, timeout=timeout)
+
+    def plan_to_pose(
+        self,
+        X_WE: RigidTransform | None = None,
+        *,
+        p_WE=None,
+        R_WE: RotationMatrix | None = None,
+        q_start=None,
+        timeout: float | None = None,
+    ) -> PlanResult:
+        """Plans to a pose of the end effector E, a position alone or an orientation alone.
+
+        IK (``RobotState.ik``, with the scene's IK tolerances) gives up to
+        ``options.ik_solutions`` distinct collision-free goals, the first seeded at the start;
+        each is tried in turn until a path is found.
+
+        Args:
+            X_WE: the goal pose of E in the world W.
+            p_WE: the goal position of E, m, any orientation (when X_WE is None).
+            R_WE: the goal orientation of E, any position (when X_WE is None).
+
+        Raises:
+            PlanningError: NO_IK_SOLUTION, GOAL_IN_COLLISION (every IK solution found without
+                collision constraints collides; the bodies are named), or as ``plan_to_joints``.
+        """
+        t0 = time.perf_counter()
+        deadline = t0 + (timeout or self._options.timeout)
+        q_start = self._check_start(q_start)
+        if X_WE is None and p_WE is None and R_WE is None:
+            raise PlanningError(ErrorCode.INVALID_GOAL, "a pose goal needs X_WE, p_WE or R_WE")
+        rng = np.random.default_rng(self._options.seed)
+        adapter = CheckerAdapter(self._scene)
+        goals, last_error = [], None
+        for k in range(self._options.ik_solutions):
+            if time.perf_counter() > deadline:
+                break
+            seed = q_start if k == 0 else rng.uniform(adapter.lower, adapter.upper)
+            try:
+                ik = self._state.ik(X_WE, p_WE=p_WE, R_WE=R_WE, q_seed=seed)
+            except PlanningError as e:
+                last_error = e
+                if not goals:  # the IK solver has already made its own restarts
+                    break
+                continue
+            if any(np.linalg.norm(ik.q - g) < 1e-3 for g in goals):
+                continue
+            goals.append(ik.q)
+            try:
+                path, how = self._find_path(q_start, ik.q, deadline)
+            except PlanningError as e:
+                last_error = e
+                continue
+            return self._result(path, how, t0)
+        if not goals:
+            self._raise_if_goal_collides(X_WE, p_WE, R_WE, q_start)
+        raise last_error or PlanningError(ErrorCode.TIMED_OUT, "no time left for IK")
+
+    def plan_cartesian(
+        self, X_WG: RigidTransform, *, q_start=None, frame: str | None = None
+    ) -> PlanResult:
+        """Plans a straight line of the end effector (or ``frame``) to the pose X_WG.
+
+        Returns a result with ``fraction`` < 1 and ``success`` False (code PLANNING_FAILED)
+        when only part of the line is achievable; the partial motion is in ``trajectory``.
+
+        Raises:
+            PlanningError: INVALID_START, START_IN_COLLISION, INVALID_GOAL, FRAME_NOT_FOUND.
+        """
+        t0 = time.perf_counter()
+        q_start = self._check_start(q_start)
+        if not np.all(np.isfinite(X_WG.GetAsMatrix4())):
+            raise PlanningError(ErrorCode.INVALID_GOAL, "the Cartesian goal pose is not finite")
+        plant, scene = self._scene.plant, self._scene
+        name = frame or scene.config.model.ee_frame
+        if not plant.HasFrameNamed(name, scene.model.instance):
+            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the Panda has no frame {name!r}")
+        opts = self._options
+        result = cartesian_path(
+            scene,
+            CheckerAdapter(scene),
+            plant.GetFrameByName(name, scene.model.instance),
+            q_start,
+            X_WG,
+            max_step=opts.cartesian_step,
+            max_rotation_step=opts.cartesian_rotation_step,
+            jump_threshold=opts.cartesian_jump_threshold,
+            resolution=opts.validation_resolution,
+        )
+        plan = self._make_plan(result.waypoints, "cartesian", t0)
+        if result.fraction < 1.0:
+            return PlanResult(
+                False,
+                plan,
+                ErrorCode.PLANNING_FAILED,
+                f"Cartesian path stopped at {result.fraction:.0%}: {result.reason}",
+                time.perf_counter() - t0,
+                result.fraction,
+            )
+        return PlanResult(True, plan, None, "Cartesian path complete", time.perf_counter() - t0)
+
+    def plan_path(self, q_start, q_goal, *, timeout: float | None = None) -> tuple[np.ndarray, str]:
+        """Returns a validated collision-free path (N, 7) between two valid configurations and
+        how it was found ("straight", "rrt_connect", ...); for benchmarks and callers that time
+        paths themselves."""
+        deadline = time.perf_counter() + (timeout or self._options.timeout)
+        return self._find_path(self._check_start(q_start), self._check_goal(q_goal), deadline)
+
+    # ------------------------------------------------------------------------- checking ----
+    def _check_start(self, q_start) -> np.ndarray:
+        q = self._state.q if q_start is None else q_start
+        q = self._as_arm(q, ErrorCode.INVALID_START, "start")
+        if not self._scene.is_collision_free(q):
+            raise PlanningError(
+                ErrorCode.START_IN_COLLISION,
+                f"the start collides: {self._scene.describe_collisions(q)}",
+            )
+        return q
+
+    def _check_goal(self, q_goal) -> np.ndarray:
+        q = self._as_arm(q_goal, ErrorCode.INVALID_GOAL, "goal")
+        if not self._scene.is_collision_free(q):
+            raise PlanningError(
+                ErrorCode.GOAL_IN_COLLISION,
+                f"the goal collides: {self._scene.describe_collisions(q)}",
+            )
+        return q
+
+    def _as_arm(self, q, code: ErrorCode, what: str) -> np.ndarray:
+        q = np.asarray(q, dtype=float).reshape(-1)
+        if q.size not in (7, 9) or not np.all(np.isfinite(q)):
+            raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {q.tolist()}")
+        q = q[:7] if q.size == 9 else q
+        if not self._scene.in_joint_limits(q, tolerance=1e-6):
+            raise PlanningError(code, f"the {what} {np.round(q, 4).tolist()} is out of limits")
+        adapter = CheckerAdapter(self._scene)
+        return np.clip(q, adapter.lower, adapter.upper)
+
+    def _raise_if_goal_collides(self, X_WE, p_WE, R_WE, q_start) -> None:
+        """Raises GOAL_IN_COLLISION when IK without collision avoidance finds only colliding
+        solutions; returns when it finds none at all."""
+        options = dc.replace(
+            self._scene.config.ik, minimum_distance=None, check_collisions=False, max_restarts=3
+        )
+        try:
+            ik = self._state.ik(X_WE, p_WE=p_WE, R_WE=R_WE, q_seed=q_start, options=options)
+        except PlanningError:
+            return
+        if not self._scene.is_collision_free(ik.q):
+            raise PlanningError(
+                ErrorCode.GOAL_IN_COLLISION,
+                f"the goal pose is only reachable in collision: "
+                f"{self._scene.describe_collisions(ik.q)}",
+            )
+
+    # --------------------------------------------------------------------------- search ----
+    def _find_path(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
+        opts = self._options
+        adapter = CheckerAdapter(self._scene)
+        fine = CheckerAdapter(self._scene, opts.validation_resolution)
+        rng = np.random.default_rng(opts.seed)
+        how = "straight"
+        path = np.vstack([q_start, q_goal])
+        if not adapter.edge_free(q_start, q_goal):
+            how = "rrt_connect"
+            path = None
+            while path is None and time.perf_counter() < deadline:
+                # Restart with fresh trees now and then: RRT run times are heavy-tailed.
+                path = rrt_connect(
+                    adapter,
+                    q_start,
+                    q_goal,
+                    step=opts.rrt_step,
+                    goal_bias=opts.goal_bias,
+                    deadline=min(deadline, time.perf_counter() + opts.rrt_restart_interval),
+                    rng=rng,
+                )
+            if path is None:
+                raise self._failure(deadline, "RRT-Connect found no path")
+            budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
+            path = shortcut(
+                adapter,
+                path,
+                iterations=opts.shortcut_iterations,
+                deadline=time.perf_counter() + budget,
+                rng=rng,
+            )
+        path, how = self._validated(fine, path, how, deadline, rng)
+        if opts.refine_with_kto and how != "straight":
+            path, how = self._refined(path, how)
+        return path, how
+
+    def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
+        from planning._kto import kto_refine
+
+        dense = kto_refine(self._scene, path, max_velocity=np.asarray(self._options.max_velocity))
+        if dense is None or path_length(dense) >= path_length(path):
+            return path, how
+        resolution = self._options.validation_resolution
+        if first_invalid_segment(CheckerAdapter(self._scene), dense, resolution) is not None:
+            return path, how
+        return dense, how + "+kto"
+
+    def _validated(self, fine, path, how, deadline, rng) -> tuple[np.ndarray, str]:
+        """Re-checks the path at the fine resolution; re-plans a failing segment with
+        RRT-Connect on fine edge checks (whose edges are then not checked twice), at most
+        ``max_repairs`` times."""
+        opts = self._options
+        for _ in range(opts.max_repairs + 1):
+            bad = first_invalid_segment(fine, path, opts.validation_resolution)
+            if bad is None:
+                return path, how
+            # Measured: a fine-checked RRT-Connect between the segment's ends (usually a few
+            # nodes) beats random two-segment detours, whose candidates mostly graze too.
+            piece = rrt_connect(
+                fine,
+                path[bad],
+                path[bad + 1],
+                step=opts.rrt_step,
+                goal_bias=opts.goal_bias,
+                deadline=deadline,
+                rng=rng,
+            )
+            if piece is None:
+                break
+            path = np.vstack([path[:bad], piece, path[bad + 2 :]])
+            how += "+repaired"
+        raise self._failure(deadline, "no path passed the fine collision check")
+
+    @staticmethod
+    def _failure(deadline: float, why: str) -> PlanningError:
+        if time.perf_counter() > deadline:
+            return PlanningError(ErrorCode.TIMED_OUT, f"{why} before the timeout")
+        return PlanningError(ErrorCode.PLANNING_FAILED, why)
+
+    # --------------------------------------------------------------------------- output ----
+    def _result(self, path: np.ndarray, how: str, t0: float) -> PlanResult:
+        plan = self._make_plan(path, how, t0)
+        return PlanResult(True, plan, None, f"planned ({how})", time.perf_counter() - t0)
+
+    def _make_plan(self, path: np.ndarray, how: str, t0: float) -> Plan:
+        opts = self._options
+        return Plan(
+            waypoints=path,
+            max_velocity=np.asarray(opts.max_velocity) * opts.velocity_scaling,
+            max_acceleration=np.asarray(opts.max_acceleration) * opts.acceleration_scaling,
+            velocity_scaling=opts.velocity_scaling,
+            acceleration_scaling=opts.acceleration_scaling,
+            finger_positions=self._scene.finger_positions,
+            scene=describe_scene(self._scene),
+            info={
+                "planner": how,
+                "planning_time_s": time.perf_counter() - t0,
+                "path_length": path_length(path),
+            },
+        )

@@ -1,0 +1,97 @@
+"""python -m planning.benchmark: one MBM problem end to end, the report rows, bad input."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import planning.benchmark as mut
+from planning import PlanningScene
+
+DATASET = Path(__file__).resolve().parents[2] / "shared/benchmarks/mbm_panda"
+needs_dataset = pytest.mark.skipif(
+    not (DATASET / "problems.tar.bz2").is_file(), reason="MBM dataset not found"
+)
+
+
+@needs_dataset
+def test_one_problem_report(tmp_path, capsys):
+    report = tmp_path / "report.json"
+    code = mut.main(
+        [
+            "--dataset",
+            str(DATASET),
+            "--families",
+            "box_panda",
+            "--limit",
+            "1",
+            "--report",
+            str(report),
+        ]
+    )
+    assert code == 0
+    rows = json.loads(report.read_text())
+    assert len(rows) == 1
+    row = rows[0]
+    for key in (
+        "family",
+        "problem",
+        "valid",
+        "success",
+        "time_s",
+        "path_length",
+        "path_valid_fine",
+        "path",
+    ):
+        assert key in row
+    assert row["family"] == "box_panda" and row["problem"] == 1
+    assert row["valid"] and row["success"] and row["path_valid_fine"]
+    path = np.asarray(row["path"])
+    assert path.shape[1] == 7
+    assert row["path_length"] == pytest.approx(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    # The path can be re-checked by anyone: check it here with the scene's own queries.
+    folder = mut.problems_folder(DATASET)
+    scene = PlanningScene()
+    scene.load_moveit(folder / "box_panda/scene0001.yaml")
+    from planning import mbm
+
+    request = mbm.load_request(folder / "box_panda/request0001.yaml")
+    scene.finger_positions = request.q_start[7:]
+    np.testing.assert_allclose(path[0], request.q_start[:7])
+    np.testing.assert_allclose(path[-1], request.q_goal[:7])
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        n = int(np.ceil(np.linalg.norm(b - a) / 0.01))
+        assert all(scene.is_collision_free(a + s * (b - a)) for s in np.linspace(0, 1, n + 1))
+    assert "box_panda" in capsys.readouterr().out
+
+
+def test_bad_arguments_exit_2(capsys):
+    assert mut.main(["--families", "nowhere"]) == 2
+    assert mut.main(["--dataset", "/nonexistent/folder"]) == 2
+    assert capsys.readouterr().err
+
+
+def test_summary_table():
+    rows = [
+        {
+            "family": "f",
+            "problem": 1,
+            "valid": True,
+            "success": True,
+            "time_s": 0.1,
+            "path_length": 2.0,
+            "path_valid_fine": True,
+        },
+        {
+            "family": "f",
+            "problem": 2,
+            "valid": False,
+            "success": False,
+            "time_s": None,
+            "path_length": None,
+            "path_valid_fine": None,
+        },
+    ]
+    table = mut.summarize(rows)
+    assert "f " in table and "100.0" in table and "2.00" in table
