@@ -234,15 +234,18 @@ def rrt_connect(
     return None
 
 
-def _extend(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None:
-    near = tree.nearest(target)
-    q_near = tree.q[near]
+def _steer(q_near: np.ndarray, target: np.ndarray, step: float) -> tuple[np.ndarray, float]:
+    """Returns the configuration at most ``step`` from ``q_near`` towards ``target``, and the
+    distance to ``target``."""
     delta = target - q_near
     dist = float(np.linalg.norm(delta))
-    if dist < 1e-9:
-        return None
-    q_new = target if dist <= step else q_near + delta * (step / dist)
-    if not adapter.edge_free(q_near, q_new):
+    return (target if dist <= step else q_near + delta * (step / dist)), dist
+
+
+def _extend(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None:
+    near = tree.nearest(target)
+    q_new, dist = _steer(tree.q[near], target, step)
+    if dist < 1e-9 or not adapter.edge_free(tree.q[near], q_new):
         return None
     return tree.add(q_new, near)
 
@@ -251,13 +254,10 @@ def _connect(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | Non
     """Extends ``tree`` towards target until it gets there (returns the node) or is blocked."""
     index = tree.nearest(target)
     while True:
-        q_near = tree.q[index]
-        delta = target - q_near
-        dist = float(np.linalg.norm(delta))
+        q_new, dist = _steer(tree.q[index], target, step)
         if dist < 1e-9:
             return index
-        q_new = target if dist <= step else q_near + delta * (step / dist)
-        if not adapter.edge_free(q_near, q_new):
+        if not adapter.edge_free(tree.q[index], q_new):
             return None
         index = tree.add(q_new, index)
         if dist <= step:

@@ -216,20 +216,18 @@ class MotionPlanner:
     # ------------------------------------------------------------------------- checking ----
     def _check_start(self, q_start) -> np.ndarray:
         q = self._state.q if q_start is None else q_start
-        q = self._as_arm(q, ErrorCode.INVALID_START, "start")
-        if not self._scene.is_collision_free(q):
-            raise PlanningError(
-                ErrorCode.START_IN_COLLISION,
-                f"the start collides: {self._scene.describe_collisions(q)}",
-            )
-        return q
+        return self._check(q, ErrorCode.INVALID_START, ErrorCode.START_IN_COLLISION, "start")
 
     def _check_goal(self, q_goal) -> np.ndarray:
-        q = self._as_arm(q_goal, ErrorCode.INVALID_GOAL, "goal")
+        return self._check(q_goal, ErrorCode.INVALID_GOAL, ErrorCode.GOAL_IN_COLLISION, "goal")
+
+    def _check(self, q, invalid: ErrorCode, colliding: ErrorCode, what: str) -> np.ndarray:
+        """Returns ``q`` as 7 arm joints, or raises ``invalid`` (not finite, wrong size, out of
+        limits) or ``colliding`` (naming the bodies in collision)."""
+        q = self._as_arm(q, invalid, what)
         if not self._scene.is_collision_free(q):
             raise PlanningError(
-                ErrorCode.GOAL_IN_COLLISION,
-                f"the goal collides: {self._scene.describe_collisions(q)}",
+                colliding, f"the {what} collides: {self._scene.describe_collisions(q)}"
             )
         return q
 
