@@ -46,6 +46,9 @@ class PandaModelConfig:
     # Padding added to robot-environment and robot-robot distances, m.
     env_collision_padding: float = 0.0
     self_collision_padding: float = 0.0
+    # How far a held object may sink into world objects, m: a grasped object still resting on
+    # the table, or set down on it, touches it (MoveIt allows this with ACM / touch links).
+    held_object_touch_tolerance: float = 0.002
 
 
 @dc.dataclass

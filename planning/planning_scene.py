@@ -71,6 +71,13 @@ class PlanningScene:
         # added later (held objects on the attachment body) are filtered as well.
         for link_a, link_b in disabled_collision_pairs(options):
             self.allow_collision(link_a, link_b)
+        # Held objects may touch world objects (they rest on the table when grasped and when
+        # placed): a negative padding between the attachment body and the world.
+        self._checker.SetPaddingBetween(
+            self._attachment_body().index(),
+            self.plant.world_body().index(),
+            options.env_collision_padding - options.held_object_touch_tolerance,
+        )
         self.place_position: np.ndarray | None = None  # p_W of a place target, m, if any
         if self._config.table is not None:
             table = self._config.table
@@ -269,16 +276,20 @@ class PlanningScene:
         return bool(np.all(q[idx] >= lower) and np.all(q[idx] <= upper))
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
-        """Returns the pairs of names (robot links, object names) in collision at q, sorted."""
+        """Returns the pairs of names (robot links, object names) in collision at q, sorted:
+        those closer than their padding (so touching pairs count when the padding is 0, and a
+        held object may sink ``held_object_touch_tolerance`` into the world)."""
         self._checker.UpdateContextPositions(self._context, self.full_q(q))
         query_object = self._context.GetQueryObject()
+        reach = max(self._checker.GetLargestPadding(), 0.0) + 1e-9
         pairs = set()
-        for pair in query_object.ComputePointPairPenetration():
+        for pair in query_object.ComputeSignedDistancePairwiseClosestPoints(reach):
             name_a, body_a = self._describe(query_object, pair.id_A)
             name_b, body_b = self._describe(query_object, pair.id_B)
             if body_a == body_b or self._checker.IsCollisionFilteredBetween(body_a, body_b):
                 continue
-            pairs.add(tuple(sorted((name_a, name_b))))
+            if pair.distance <= self._checker.GetPaddingBetween(body_a, body_b) + 1e-9:
+                pairs.add(tuple(sorted((name_a, name_b))))
         return sorted(pairs)
 
     def describe_collisions(self, q) -> str:

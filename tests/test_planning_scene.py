@@ -236,3 +236,24 @@ def test_meshcat_shows_attached_objects_in_another_colour(tmp_path):
     from planning import scene_display
 
     assert scene_display.ATTACHED_COLOR.rgba.tolist() != scene_display.WORLD_COLOR.rgba.tolist()
+
+
+def test_held_object_may_rest_on_the_table_but_not_sink_into_it(dut, ready):
+    """A grasped object still standing on the table touches it: allowed, as MoveIt's touch
+    links allow it; pushed 1 cm into the table it collides, and the pair is named."""
+    tolerance = dut.config.model.held_object_touch_tolerance
+    assert tolerance > 0
+    X_WA = dut.attachment_pose(ready)
+    height = 0.08
+    for sink, free in ((0.0, True), (0.5 * tolerance, True), (0.01, False)):
+        # A box hanging below the hand whose bottom is `sink` below the table top (z = 0).
+        z_bottom = -sink
+        p_WO = [X_WA.translation()[0], X_WA.translation()[1], z_bottom + height / 2]
+        dut.attach_new(
+            mut.SceneObject(
+                "held", "box", (0.04, 0.04, height), X_WA.inverse() @ RigidTransform(p_WO)
+            )
+        )
+        assert dut.is_collision_free(ready) == free, sink
+        assert (("held", "table") in dut.colliding_pairs(ready)) == (not free)
+        dut.remove_object("held")
