@@ -253,13 +253,17 @@ class AxleGroundTruth(LeafSystem):
     def _calc_pose(self, context, output):
         state = self._state.Eval(context)
         R_WB = rotation_from_quaternion(state[self._quaternion])
-        p_WA = state[self._position] + R_WB @ self._p_BA
-        yaw, _ = axle_yaw_and_pitch(R_WB)
-        output.SetFromVector([p_WA[0], p_WA[1], yaw])
+        output.SetFromVector(_axle_pose(R_WB, state[self._position], self._p_BA))
 
 
 def axle_pose(X_WB: RigidTransform, robot: RobotParams) -> np.ndarray:
     """``[x, y, yaw]`` of the axle frame for a body pose X_WB (e.g. the start pose)."""
-    p_WA = X_WB.multiply(np.array([robot.axle_x, 0.0, 0.0]))
-    yaw, _ = axle_yaw_and_pitch(X_WB.rotation().matrix())
+    p_BA = np.array([robot.axle_x, 0.0, 0.0])
+    return _axle_pose(X_WB.rotation().matrix(), X_WB.translation(), p_BA)
+
+
+def _axle_pose(R_WB: np.ndarray, p_WB: np.ndarray, p_BA: np.ndarray) -> np.ndarray:
+    """``[x, y, yaw]`` of the axle frame A at p_BA on a body with orientation R_WB at p_WB."""
+    p_WA = p_WB + R_WB @ p_BA
+    yaw, _ = axle_yaw_and_pitch(R_WB)
     return np.array([p_WA[0], p_WA[1], yaw])
