@@ -19,6 +19,8 @@ class ErrorCode(enum.Enum):
     INVALID_OBJECT_NAME = "invalid_object_name"
     INVALID_SCENE = "invalid_scene"
     FRAME_NOT_FOUND = "frame_not_found"
+    CONTROL_FAILED = "control_failed"
+    PREEMPTED = "preempted"
 
 
 class PlanningError(RuntimeError):

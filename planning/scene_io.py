@@ -83,6 +83,16 @@ def load_scene_yaml(scene, filename: Path | str) -> None:
         spec = yaml_load_typed(schema=SceneFile, filename=str(filename))
     except (yaml.YAMLError, RuntimeError, ValueError, TypeError, AttributeError) as e:
         raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
+    apply_scene_file(scene, spec, where=str(filename))
+
+
+def apply_scene_file(scene, spec: SceneFile, *, where: str = "scene") -> None:
+    """Replaces the world objects of ``scene`` (the table too) by those of a parsed
+    ``SceneFile`` and sets ``scene.place_position``.
+
+    Raises:
+        PlanningError: INVALID_SCENE for bad values, naming ``where`` and the object.
+    """
     try:
         objects = [
             _box_object(name, box)
@@ -97,7 +107,7 @@ def load_scene_yaml(scene, filename: Path | str) -> None:
         attached = [_spec_object(o) for o in spec.attached]
         place = None if spec.place is None else make_pose(spec.place.position, name="place")
     except ValueError as e:
-        raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
+        raise PlanningError(ErrorCode.INVALID_SCENE, f"{where}: {e}") from e
     _replace(scene, objects, attached)
     scene.place_position = None if place is None else place.translation()
 

@@ -1,0 +1,133 @@
+"""``python -m drake_sim.pickplace``: the Panda picks the object and places it beyond the obstacle.
+
+With a viewer (the default) the station runs in real time in Meshcat: open the page, press
+"Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. ``--headless`` runs the task at
+once, flat out. ``--mode physics`` (default) simulates contact and grasps the object by friction;
+``--mode kinematic`` plays the planned motions back (Franka's fake hardware).
+Exit codes: 0 on success, 1 when the task is impossible or a step failed (one stderr line names
+the step and the reason), 2 on bad input.
+"""
+
+import dataclasses as dc
+import json
+import sys
+from pathlib import Path
+
+from pydrake.geometry import StartMeshcat
+
+from diagrams.panda_station import MODES, load_station_config
+from diagrams.planning_station import make_planning_station
+from drake_sim import cli
+from drake_sim.errors import ConfigError
+from drake_sim.resources import config_dir
+from planning.errors import ErrorCode, PlanningError
+from planning.motion_planner import load_planner_options
+from planning.pick_place import PickPlaceTask, StepReport
+
+BUTTON = "Pick"
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise cli.argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise cli.argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
+
+
+def _parse_args(argv):
+    parser = cli.ArgumentParser(
+        prog="python -m drake_sim.pickplace", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "--scene", type=Path, default=config_dir() / "pickplace.yaml", help="scene YAML"
+    )
+    parser.add_argument(
+        "--station", type=Path, default=config_dir() / "station.yaml", help="station YAML"
+    )
+    parser.add_argument("--mode", choices=MODES, default="physics", help="default: physics")
+    parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
+    parser.add_argument("--no-wait", action="store_true", help="with a viewer: start at once")
+    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
+    parser.add_argument("--report", type=Path, help="write the JSON report")
+    parser.add_argument("--seed", type=_seed, help="planner random seed")
+    return parser.parse_args(argv)
+
+
+def _print_step(step: StepReport) -> None:
+    mark = "ok  " if step.success else "FAIL"
+    print(
+        f"[{mark}] {step.name:<18} t = {step.sim_time_s:6.2f} s  "
+        f"planning {step.planning_time_s * 1000:6.1f} ms  {step.message}",
+        flush=True,
+    )
+
+
+def _wait_for_button(mpi, meshcat) -> None:
+    meshcat.AddButton(BUTTON)
+    print(f"open {meshcat.web_url()} and press {BUTTON!r} (Ctrl-C quits)", flush=True)
+    while meshcat.GetButtonClicks(BUTTON) == 0:
+        mpi.advance(0.05)
+    meshcat.DeleteButton(BUTTON)
+
+
+def main(argv=None) -> int:
+    args = _parse_args(argv)
+    config = load_station_config(args.station, args.scene)
+    planner_options = load_planner_options()
+    if args.seed is not None:
+        planner_options = dc.replace(planner_options, seed=args.seed)
+    viewer = not args.headless
+    meshcat = StartMeshcat() if viewer or args.record else None
+    try:
+        mpi = make_planning_station(
+            config,
+            mode=args.mode,
+            meshcat=meshcat,
+            planner_options=planner_options,
+            realtime_rate=1.0 if viewer else 0.0,
+        )
+    except PlanningError as e:
+        if e.code is ErrorCode.INVALID_SCENE:
+            raise ConfigError(e.message) from None
+        raise
+    if meshcat is not None:
+        meshcat.SetCameraPose([1.6, -1.2, 0.9], [0.4, 0.0, 0.15])
+        if args.record:
+            meshcat.StartRecording()
+    if viewer and not args.no_wait:
+        _wait_for_button(mpi, meshcat)
+    task = PickPlaceTask(mpi, on_step=_print_step)
+    report = task.run()
+    if args.record:
+        cli.write_replay(meshcat, args.record)
+    data = {"mode": args.mode, **report.to_dict()}
+    error = "n/a" if report.place_error_m is None else f"{report.place_error_m:.4f} m"
+    print(
+        f"{'success' if report.success else 'failure'}: place error {error}, planning "
+        f"{report.planning_time_s:.2f} s, {report.sim_time_s:.1f} s simulated in "
+        f"{report.wall_time_s:.1f} s"
+    )
+    if args.report:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps(data, indent=2) + "\n")
+    code = cli.EXIT_OK
+    if not report.success:
+        what = "impossible task" if report.impossible else f"step {report.failed_step} failed"
+        reason = " ".join(report.reason.split())  # one line
+        print(f"error: {what}: {reason}", file=sys.stderr, flush=True)
+        code = cli.EXIT_FAILED
+    if viewer:
+        print("Ctrl-C quits", flush=True)
+        try:
+            while True:
+                mpi.advance(0.1)
+        except KeyboardInterrupt:
+            pass
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(cli.run(main))

@@ -1,0 +1,209 @@
+"""The systems a ``MotionPlanningInterface`` adds to a diagram: the command source of the Panda
+and, in kinematic mode, the held object's pose.
+
+Both keep what they are doing in abstract Drake state. The interface changes that state between
+``Simulator.AdvanceTo`` calls (a new plan, a gripper move, a stop), like a ROS action server
+receiving a goal; their outputs are functions of the state and the time only.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+from pydrake.common.value import Value
+from pydrake.math import RigidTransform
+from pydrake.systems.framework import LeafSystem
+
+
+@dc.dataclass(frozen=True)
+class ArmCommand:
+    """What the arm follows: a plan started at ``t0``, or a fixed configuration.
+
+    A stop (``cancel``) leaves the plan's path at the cancel time and slows down along it: the
+    path parameter's rate falls linearly from 1 to 0 over ``stop_duration``, so the arm never
+    leaves the collision-checked path and comes to rest on it.
+
+    Attributes:
+        q_hold: 7 arm joints held when there is no plan, rad.
+        plan: a ``Plan`` (its ``sample(t)`` gives the 7 arm joints) or None.
+        t0: simulated time at which the plan starts, s.
+        stop_at: simulated time a stop began, s, or None.
+        stop_duration: s, time to come to rest from ``stop_at``.
+    """
+
+    q_hold: np.ndarray
+    plan: object | None = None
+    t0: float = 0.0
+    stop_at: float | None = None
+    stop_duration: float = 0.0
+
+    def plan_time(self, t: float) -> float:
+        """The time along the plan at simulated time t (slowed down after a stop), s."""
+        tau = t - self.t0
+        if self.stop_at is None:
+            return tau
+        elapsed = min(max(t - self.stop_at, 0.0), self.stop_duration)
+        t_c = self.stop_at - self.t0
+        if self.stop_duration <= 0.0:
+            return t_c
+        return t_c + elapsed - elapsed * elapsed / (2.0 * self.stop_duration)
+
+    def end_time(self) -> float:
+        """Simulated time at which the command comes to rest, s."""
+        if self.plan is None:
+            return self.t0
+        if self.stop_at is not None:
+            return self.stop_at + self.stop_duration
+        return self.t0 + self.plan.duration
+
+    def sample(self, t: float) -> np.ndarray:
+        """The 7 commanded arm joints at simulated time t, rad."""
+        if self.plan is None:
+            return self.q_hold
+        return self.plan.sample(self.plan_time(t))[0]
+
+    def stopped(self, t: float, max_acceleration: np.ndarray) -> ArmCommand:
+        """Returns the command that brings the arm to rest along the plan from time t."""
+        if self.plan is None or t >= self.end_time():
+            return self
+        _, v, _ = self.plan.sample(self.plan_time(t))
+        # Slowing the path rate linearly over T scales the velocity by (1 - s/T) and adds -v/T:
+        # twice the most limited joint's braking time keeps that term under half its limit.
+        duration = max(0.05, 2.0 * float(np.max(np.abs(v) / np.asarray(max_acceleration))))
+        return dc.replace(self, stop_at=t, stop_duration=duration)
+
+
+@dc.dataclass(frozen=True)
+class GripperCommand:
+    """Each finger moves from ``start`` to ``target`` at ``speed``, starting at ``t0``.
+
+    Attributes:
+        start: finger position at t0, m (0 closed, 0.04 open).
+        target: finger position commanded at the end, m.
+        t0: simulated time the move starts, s.
+        speed: m/s per finger.
+    """
+
+    start: float
+    target: float
+    t0: float = 0.0
+    speed: float = 0.05
+
+    def end_time(self) -> float:
+        return self.t0 + abs(self.target - self.start) / self.speed
+
+    def sample(self, t: float) -> float:
+        travel = min(max(t - self.t0, 0.0) * self.speed, abs(self.target - self.start))
+        return self.start + np.sign(self.target - self.start) * travel
+
+
+class PandaCommander(LeafSystem):
+    """The Panda's position command: the arm from an ``ArmCommand``, the fingers from a
+    ``GripperCommand``, both held in abstract state.
+
+    .. pydrake_system::
+
+        name: PandaCommander
+        output_ports:
+        - position_command
+
+    ``position_command`` has 9 values: 7 arm joints (rad) then both fingers (m).
+    """
+
+    def __init__(self, *, q_arm: np.ndarray, finger: float):
+        super().__init__()
+        arm = ArmCommand(q_hold=np.asarray(q_arm, dtype=float).copy())
+        self._arm = self.DeclareAbstractState(Value[object](arm))
+        self._gripper = self.DeclareAbstractState(Value[object](GripperCommand(finger, finger)))
+        self.DeclareVectorOutputPort("position_command", 9, self.CalcCommand)
+
+    def CalcCommand(self, context, output) -> None:
+        t = context.get_time()
+        arm = context.get_abstract_state(self._arm).get_value()
+        finger = context.get_abstract_state(self._gripper).get_value().sample(t)
+        values = np.empty(9)
+        values[:7] = arm.sample(t)
+        values[7:] = finger
+        output.SetFromVector(values)
+
+    def arm(self, context) -> ArmCommand:
+        return context.get_abstract_state(self._arm).get_value()
+
+    def gripper(self, context) -> GripperCommand:
+        return context.get_abstract_state(self._gripper).get_value()
+
+    def set_arm(self, context, command: ArmCommand) -> None:
+        context.get_mutable_abstract_state(self._arm).set_value(command)
+
+    def set_gripper(self, context, command: GripperCommand) -> None:
+        context.get_mutable_abstract_state(self._gripper).set_value(command)
+
+
+@dc.dataclass(frozen=True)
+class Grip:
+    """Where the object is: held (``X_AO``, in the hand's attachment frame A) or resting
+    (``X_WO``)."""
+
+    X_WO: RigidTransform
+    X_AO: RigidTransform | None = None
+
+
+class ObjectFollower(LeafSystem):
+    """Kinematic mode's stand-in for friction: the object's positions, resting or carried by the
+    hand.
+
+    .. pydrake_system::
+
+        name: ObjectFollower
+        input_ports:
+        - panda_state
+        output_ports:
+        - object_positions
+
+    ``panda_state`` is the Panda's 18-value state (9 positions first); ``object_positions`` the
+    object's 7 free-body positions [qw, qx, qy, qz, x, y, z].
+
+    Args:
+        plant: a plant holding the Panda (e.g. the planning scene's), used for the hand's pose.
+        body: its attachment body A.
+        X_WO: the object's initial pose.
+    """
+
+    def __init__(self, *, plant, body, X_WO: RigidTransform):
+        super().__init__()
+        self._plant, self._body = plant, body
+        self._plant_context = plant.CreateDefaultContext()  # a cache for forward kinematics
+        self._instance = body.model_instance()
+        self._grip = self.DeclareAbstractState(Value[object](Grip(X_WO)))
+        self._state = self.DeclareVectorInputPort("panda_state", 18)
+        self.DeclareVectorOutputPort("object_positions", 7, self.CalcPositions)
+
+    def X_WA(self, q: np.ndarray) -> RigidTransform:
+        """The attachment frame's pose at the Panda's 9 positions q."""
+        self._plant.SetPositions(self._plant_context, self._instance, q)
+        return self._plant.EvalBodyPoseInWorld(self._plant_context, self._body)
+
+    def pose(self, context) -> RigidTransform:
+        grip = context.get_abstract_state(self._grip).get_value()
+        if grip.X_AO is None:
+            return grip.X_WO
+        return self.X_WA(self._state.Eval(context)[:9]) @ grip.X_AO
+
+    def CalcPositions(self, context, output) -> None:
+        X_WO = self.pose(context)
+        quaternion = X_WO.rotation().ToQuaternion().wxyz()
+        output.SetFromVector(np.concatenate([quaternion, X_WO.translation()]))
+
+    def grab(self, context) -> None:
+        """The hand carries the object from now on, keeping its current pose relative to A."""
+        X_WO = self.pose(context)
+        X_AO = self.X_WA(self._state.Eval(context)[:9]).inverse() @ X_WO
+        context.get_mutable_abstract_state(self._grip).set_value(Grip(X_WO, X_AO))
+
+    def release(self, context) -> None:
+        """The object stays where it is now."""
+        context.get_mutable_abstract_state(self._grip).set_value(Grip(self.pose(context)))
+
+    def held(self, context) -> bool:
+        return context.get_abstract_state(self._grip).get_value().X_AO is not None
