@@ -10,6 +10,7 @@ the step and the reason), 2 on bad input.
 
 import dataclasses as dc
 import json
+import logging
 import sys
 from pathlib import Path
 
@@ -75,6 +76,7 @@ def _wait_for_button(mpi, meshcat) -> None:
 
 def main(argv=None) -> int:
     args = _parse_args(argv)
+    logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors only
     config = load_station_config(args.station, args.scene)
     planner_options = load_planner_options()
     if args.seed is not None:

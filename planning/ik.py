@@ -29,6 +29,8 @@ from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
 
 _REACH_MARGIN = 0.02  # m added to the computed reach bound
+_POSITION_COST = 1e3  # 1/m^2, weight of the squared position error (joint cost: 1e-2/rad^2)
+_ORIENTATION_COST = 10.0  # weight of (1 - cos(angle error))
 
 
 @dataclass
@@ -147,10 +149,14 @@ class IkSolver:
         if p_WE is not None:
             tol = np.full(3, options.position_tolerance)
             ik.AddPositionConstraint(frame, np.zeros(3), world, p_WE - tol, p_WE + tol)
+            # Aim for the centre of the tolerance box (the joint cost alone would stop at the
+            # box's corner nearest the seed): 1 mm costs as much as moving joints 0.3 rad.
+            ik.AddPositionCost(world, p_WE, frame, np.zeros(3), _POSITION_COST * np.eye(3))
         if R_WE is not None:
             ik.AddOrientationConstraint(
                 world, R_WE, frame, RotationMatrix(), options.orientation_tolerance
             )
+            ik.AddOrientationCost(world, R_WE, frame, RotationMatrix(), _ORIENTATION_COST)
         arm, fingers = scene.model.arm_indices, scene.model.finger_indices
         prog.AddBoundingBoxConstraint(self._lower, self._upper, q_vars[arm])
         f = scene.finger_positions

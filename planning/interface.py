@@ -26,6 +26,7 @@ import dataclasses as dc
 from collections.abc import Callable
 
 import numpy as np
+from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 
 from planning._commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
@@ -168,7 +169,8 @@ class MotionPlanningInterface:
         """X_WO of the simulated object (the station's ``object.pose``), or None."""
         if not self._station.HasOutputPort("object.pose"):
             return None
-        return self._station.GetOutputPort("object.pose").Eval(self._context(self._station))
+        X_WO = self._station.GetOutputPort("object.pose").Eval(self._context(self._station))
+        return RigidTransform(X_WO)  # a copy: Eval returns the port's cached value
 
     # ------------------------------------------------------------------------ advancing ----
     def advance(self, duration: float) -> None:

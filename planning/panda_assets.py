@@ -27,7 +27,7 @@ from drake_sim.resources import cache_dir
 _DISTRIBUTION = "example-robot-data"
 _DESCRIPTION = "cmeel.prefix/share/example-robot-data/robots/panda_description"
 _PACKAGE_PREFIX = "package://example-robot-data/robots/panda_description/"
-_CONVERTER_VERSION = "2"  # Bump when the conversion below changes its output.
+_CONVERTER_VERSION = "4"  # Bump when the conversion below changes its output.
 
 COLLISION_GEOMETRIES = ("convex_mesh", "primitives")
 """``convex_mesh``: the URDF's STL collision meshes, declared convex to Drake (each is a
@@ -100,6 +100,7 @@ def _hash_inputs(description: Path, collision_geometry: str) -> str:
 
 def _convert_mesh(source: Path, target: Path) -> None:
     """Converts one mesh file with trimesh, writing atomically."""
+    import numpy as np
     import trimesh
 
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -110,7 +111,12 @@ def _convert_mesh(source: Path, target: Path) -> None:
         # Geometry only: Drake uses collision meshes for their shape, never their material.
         tmp.write_text(trimesh.exchange.obj.export_obj(mesh, include_normals=False))
     else:
-        loaded.export(str(tmp))
+        # One self-contained glTF (buffers embedded): Meshcat shows .gltf, not .glb. glTF is
+        # y-up and Drake turns it z-up on loading, so turn the z-up mesh y-up first.
+        scene = loaded if isinstance(loaded, trimesh.Scene) else trimesh.Scene(loaded)
+        scene.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+        files = trimesh.exchange.gltf.export_gltf(scene, embed_buffers=True)
+        tmp.write_bytes(files["model.gltf"])
     tmp.replace(target)
 
 
@@ -127,7 +133,7 @@ def _rewrite_urdf(text: str, out_dir: Path, description: Path) -> str:
             raise ValueError(f"unexpected mesh URI {uri!r} in the Panda URDF")
         relative = Path(uri[len(_PACKAGE_PREFIX) :])
         is_visual = relative.parts[1] == "visual"
-        suffix = ".glb" if is_visual else ".obj"
+        suffix = ".gltf" if is_visual else ".obj"
         converted = relative.with_suffix(suffix)
         if not (out_dir / converted).is_file():
             _convert_mesh(description / relative, out_dir / converted)

@@ -13,9 +13,11 @@ The steps (each reported as it ends, with its planning time):
    down until the object is just above the table;
 8. ``release``: open, detach the object into the scene at its measured pose, retreat up.
 
-Before moving, ``check`` looks for reasons the task cannot work (no object or place target, an
-object too wide for the hand, an object or a place target inside another object, no collision-
-free IK solution for the grasp or the place): such a scene is reported impossible, not tried.
+Before moving, ``check`` (reported as step 0, its time counted as planning) looks for reasons
+the task cannot work: no object or place target, an object too wide for the hand, an object or a
+place target inside another object, no collision-free IK solution above the grasp or the place
+with a straight line down from there. Such a scene is reported impossible, not tried. The check
+also picks the grasp: the first top-down yaw, nearest the hand's, for which all of that works.
 While the planning scene plans the lift, the fingers are modelled open (the planning scene keeps
 ``finger_positions`` at the open hand), so closing on the object is not a collision.
 """
@@ -148,25 +150,37 @@ class PickPlaceTask:
             return f"the object is wider than the hand can hold ({opts.max_object_width} m)"
         hand = self._mpi.state.hand_pose().rotation()
         grasps.sort(key=lambda X: rotation_distance(hand, X.rotation()))
+        why = ""
         for X_WG in grasps:
             X_OG = X_WO.inverse() @ X_WG
-            if all(self._has_ik(X) for X in self._key_poses(X_WO, X_OG, obj.size)):
+            approaches, why = self._approaches(X_WO, X_OG, obj.size)
+            if approaches is not None:
                 self._grasp = X_OG
+                self._q_pregrasp, self._q_preplace = approaches
                 return None
-        return "no collision-free IK solution for the grasp and the place poses (out of reach?)"
+        return why
 
-    def _has_ik(self, X_WG: RigidTransform) -> bool:
-        try:
-            self._mpi.state.ik(X_WG)
-        except PlanningError:
-            return False
-        return True
-
-    def _key_poses(self, X_WO, X_OG, size) -> list[RigidTransform]:
+    def _approaches(self, X_WO, X_OG, size) -> tuple[list[np.ndarray] | None, str]:
+        """For a grasp X_OG: collision-free IK above the grasp and above the place, each with a
+        straight line down to it (the place one without the held object, which the planner
+        adds when the object is attached). Returns (the two configurations above, "") or
+        (None, why not)."""
         X_WG = self._grasp_pose(X_WO, X_OG, size)
-        X_WP = self._place_pose(X_WO) @ X_WO.inverse() @ X_WG
-        up = self._up
-        return [up(X_WG, self.options.pregrasp_height), X_WG, X_WP]
+        X_WP = self._place_pose(X_WO) @ X_WO.inverse() @ X_WG  # the TCP when placing
+        opts, q_high = self.options, []
+        for what, X_low, height in (
+            ("the object", X_WG, opts.pregrasp_height),
+            ("the place target", X_WP, opts.preplace_height),
+        ):
+            try:
+                q = self._mpi.state.ik(self._up(X_low, height)).q
+            except PlanningError as e:
+                return None, f"no collision-free IK above {what} (out of reach?): {e.message}"
+            line = self._mpi.planner.plan_cartesian(X_low, q_start=q)
+            if not line.success:
+                return None, f"no straight way down to {what}: {line.message}"
+            q_high.append(q)
+        return q_high, ""
 
     @staticmethod
     def _up(X: RigidTransform, height: float) -> RigidTransform:
@@ -210,7 +224,12 @@ class PickPlaceTask:
         """Runs the task and returns its report (never raises for a failed step)."""
         wall0, sim0 = time.perf_counter(), self._mpi.time
         report = TaskReport()
+        t0 = time.perf_counter()
         reason = self.check()
+        check = StepReport("check", reason is None, time.perf_counter() - t0, reason or "feasible")
+        report.steps.append(check)
+        if self._on_step is not None:
+            self._on_step(check)
         if reason is not None:
             report.impossible, report.failed_step, report.reason = True, "check", reason
         else:
@@ -269,8 +288,8 @@ class PickPlaceTask:
     def _move_above_object(self) -> str:
         obj = self._scene.world_objects[OBJECT]
         self._X_WG = self._grasp_pose(self._object_pose(), self._grasp, obj.size)
-        target = self._up(self._X_WG, self.options.pregrasp_height)
-        return self._execute(self._plan_timed(self._mpi.planner.plan_to_pose, target))
+        request = self._mpi.planner.plan_to_joints
+        return self._execute(self._plan_timed(request, self._q_pregrasp))
 
     def _plan_timed(self, request, *args, **kwargs):
         """Runs a planner request from the current state; counts its time if it raises (a
@@ -313,9 +332,14 @@ class PickPlaceTask:
 
     def _move_to_place(self) -> str:
         X_WO_place = self._place_pose(self._object_pose())
-        X_WG = X_WO_place @ self._X_OG
+        X_WG = X_WO_place @ self._X_OG  # with the grasp as measured now
         above = self._up(X_WG, self.options.preplace_height)
-        self._execute(self._plan_timed(self._mpi.planner.plan_to_pose, above))
+        t0 = time.perf_counter()
+        try:  # the arm configuration checked before the task, corrected for the real grasp
+            q_above = self._mpi.state.ik(above, q_seed=self._q_preplace).q
+        finally:
+            self._planning += time.perf_counter() - t0
+        self._execute(self._plan_timed(self._mpi.planner.plan_to_joints, q_above))
         return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, X_WG))
 
     def _release(self) -> str:

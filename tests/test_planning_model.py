@@ -22,8 +22,8 @@ def test_urdf_is_cached_with_relative_converted_meshes():
         text = urdf.read_text()
         assert "package://" not in text and str(cache_dir()) not in text
         assert ".dae" not in text and ".stl" not in text
-        assert "../meshes/visual/link1.glb" in text
-        assert (urdf.parent / "../meshes/visual/hand.glb").resolve().is_file()
+        assert "../meshes/visual/link1.gltf" in text
+        assert (urdf.parent / "../meshes/visual/hand.gltf").resolve().is_file()
         assert panda_assets.panda_urdf(geometry) == urdf  # the second call reuses the cache
     assert "declare_convex" in panda_assets.panda_urdf("convex_mesh").read_text()
     with pytest.raises(ValueError, match="collision_geometry"):

@@ -1,0 +1,116 @@
+"""PickPlaceTask on the Panda station in both modes, in simulated time."""
+
+import dataclasses as dc
+
+import numpy as np
+import pytest
+
+import planning.pick_place as mut
+from diagrams.panda_station import load_station_config
+from planning._task_geometry import boxes_overlap
+from planning.scene_io import BoxSpec
+from tests.pickplace_helpers import random_scene, run_task
+
+STEPS = [
+    "check",
+    "move_above_object",
+    "open_gripper",
+    "approach",
+    "close_gripper",
+    "lift",
+    "attach",
+    "move_to_place",
+    "release",
+]
+
+
+@pytest.fixture(scope="module")
+def config():
+    return load_station_config()
+
+
+class ObstacleWatch:
+    """Records, at every poll, whether the simulated object overlaps the obstacle."""
+
+    def __init__(self, config):
+        self.size = config.scene.object.size
+        obstacle = config.scene.obstacle
+        from diagrams._panda_station_systems import box_pose
+
+        self.obstacle = (obstacle.size, box_pose(obstacle))
+        self.overlaps, self.lowest = 0, np.inf
+
+    def __call__(self, interface):
+        X_WO = interface.object_pose()
+        if boxes_overlap(self.size, X_WO, *self.obstacle):
+            self.overlaps += 1
+        self.lowest = min(self.lowest, X_WO.translation()[2])
+
+
+@pytest.mark.parametrize("mode", ["kinematic", "physics"])
+def test_default_task_succeeds(config, mode):
+    watch = ObstacleWatch(config)
+    report, _ = run_task(config, mode, monitor=watch)
+    assert report.success, report.reason
+    assert [s.name for s in report.steps] == STEPS and all(s.success for s in report.steps)
+    assert report.place_error_m <= 0.02
+    assert watch.overlaps == 0  # never through the obstacle
+    assert watch.lowest > 0.5 * config.scene.object.size[2] - 0.005  # nor through the table
+    data = report.to_dict()
+    for key in ("success", "place_error_m", "object_final_position", "planning_time_s"):
+        assert key in data
+    assert data["planning_time_s"] == pytest.approx(
+        sum(s["planning_time_s"] for s in data["steps"])
+    )
+
+
+@pytest.mark.parametrize(
+    "change,reason",
+    [
+        ({"object": BoxSpec([0.045, 0.045, 0.08], [1.3, -0.25, 0.04], mass=0.1)}, "out of reach"),
+        ({"object": BoxSpec([0.045, 0.045, 0.08], [0.5, 0.0, 0.04], mass=0.1)}, "overlaps"),
+        ({"object": BoxSpec([0.09, 0.10, 0.08], [0.5, -0.25, 0.04], mass=0.1)}, "wider"),
+    ],
+    ids=["out_of_reach", "inside_obstacle", "too_wide"],
+)
+def test_impossible_scenes_are_reported_not_tried(config, change, reason):
+    scene = dc.replace(config.scene, **change)
+    report, interface = run_task(dc.replace(config, scene=scene), "kinematic")
+    assert report.impossible and not report.success and report.failed_step == "check"
+    assert reason in report.reason
+    assert [s.name for s in report.steps] == ["check"] and interface.time == 0.0  # no motion
+
+
+def test_place_inside_the_obstacle_is_impossible(config):
+    scene = dc.replace(config.scene, place=dc.replace(config.scene.place, position=[0.5, 0, 0.04]))
+    report, _ = run_task(dc.replace(config, scene=scene), "kinematic")
+    assert report.impossible and "place target" in report.reason
+
+
+def run_random(config, mode, count=20, seed=7):
+    rng = np.random.default_rng(seed)
+    reports = []
+    for _ in range(count):
+        scene = random_scene(rng, config.scene)
+        reports.append(run_task(dc.replace(config, scene=scene), mode)[0])
+    return reports
+
+
+def test_random_scenes_kinematic(config):
+    reports = run_random(config, "kinematic")
+    failures = [(r.failed_step, r.reason) for r in reports if not r.success]
+    assert not failures
+    assert max(r.place_error_m for r in reports) < 1e-3
+
+
+@pytest.mark.slow
+def test_random_scenes_physics(config):
+    reports = run_random(config, "physics")
+    failures = [(r.failed_step, r.reason) for r in reports if not r.success]
+    assert len(failures) <= 1, failures
+    assert max(r.place_error_m for r in reports if r.success) <= 0.02
+
+
+def test_options_defaults():
+    dut = mut.PickPlaceOptions()
+    assert dut.max_object_width < 0.08 and dut.place_tolerance == 0.02
