@@ -3,26 +3,32 @@
 File format (JSON, one object; ``Plan.save`` / ``Plan.load``)::
 
     {
-      "format": "drake_sim.plan", "version": 1,
+      "format": "drake_sim.plan", "version": 2,
       "robot": {"name": "panda", "joints": ["panda_joint1", ...]},
       "waypoints": [[q1..q7], ...],            # rad, the collision-checked path
       "max_velocity": [7 values],              # rad/s, limits after scaling
       "max_acceleration": [7 values],          # rad/s^2, limits after scaling
       "velocity_scaling": 1.0, "acceleration_scaling": 1.0,
       "finger_positions": [f1, f2],            # m, held during the motion
+      "timing": {"method": "toppra", "max_corner_angle": 1.0,   # rad
+                 "path_tolerance": 0.002, "margin": 0.01},      # rad, fraction
       "scene": {"world": [object, ...], "attached": [object, ...]},
       "info": {...}                            # free-form: planner, planning time, ...
     }
 
 where an object is ``{"name", "shape", "size", "position", "orientation": [x, y, z, w]}`` as in
 ``scene_objects`` (world objects: pose X_WO; attached ones: X_AO in the hand's attachment frame).
-Times are not stored: they follow from the waypoints and limits (``planning._retime``), so a
-loaded plan samples exactly as the saved one. Floats are written with ``repr`` precision, so a
-plan loads back equal.
+``timing`` holds ``planning._retime.RetimeOptions``. Version 1 files have no ``timing``: they
+load with ``method: rest_to_rest`` (a stop at every waypoint), the timing they were saved with.
+Times are not stored: they follow from the waypoints, limits and timing options
+(``planning._retime``), so a loaded plan samples exactly as the saved one. Floats are written
+with ``repr`` precision, so a plan loads back equal.
 """
 
 from __future__ import annotations
 
+import dataclasses as dc
+import functools
 import json
 import time
 from dataclasses import dataclass, field
@@ -30,12 +36,13 @@ from pathlib import Path
 
 import numpy as np
 
-from planning._retime import sample_segment, segment_profiles
+from planning._retime import RetimeOptions, Timing
 from planning._rrt import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
 from planning.panda_model import ARM_JOINTS
 
 _FORMAT = "drake_sim.plan"
+_VERSION = 2
 
 
 def describe_scene(scene) -> dict:
@@ -59,7 +66,12 @@ def describe_scene(scene) -> dict:
 
 @dataclass
 class Plan:
-    """A rest-to-rest timed trajectory through joint waypoints (see ``planning._retime``).
+    """A timed trajectory through joint waypoints (see ``planning._retime``).
+
+    The trajectory starts and ends at rest exactly at the first and last waypoints, stops at
+    sharp corners of the path, and elsewhere stays within ``timing.path_tolerance`` (rad) of the
+    straight segments between the waypoints; no joint exceeds ``max_velocity`` or
+    ``max_acceleration``.
 
     Attributes:
         waypoints: (N, 7) arm joints, rad; the straight-line interpolation is the checked path.
@@ -69,6 +81,7 @@ class Plan:
         finger_positions: (2,) m, during the motion.
         scene: ``describe_scene`` of the scene it was planned in.
         robot: name and joint names.
+        timing: how the path is timed (``planning._retime.RetimeOptions``).
         info: free-form facts (planner, planning time, path length, ...).
     """
 
@@ -81,6 +94,7 @@ class Plan:
     scene: dict = field(default_factory=lambda: {"world": [], "attached": []})
     robot: dict = field(default_factory=lambda: {"name": "panda", "joints": list(ARM_JOINTS)})
     info: dict = field(default_factory=dict)
+    timing: RetimeOptions = field(default_factory=RetimeOptions)
 
     def __post_init__(self):
         self.waypoints = np.atleast_2d(np.asarray(self.waypoints, dtype=float))
@@ -91,21 +105,25 @@ class Plan:
             raise ValueError(f"waypoints must be (N, 7), got {self.waypoints.shape}")
         if np.any(self.max_velocity <= 0) or np.any(self.max_acceleration <= 0):
             raise ValueError("velocity and acceleration limits must be positive")
-        self._durations, self._ramps, self._accels = segment_profiles(
-            self.waypoints, self.max_velocity, self.max_acceleration
-        )
-        self._times = np.concatenate([[0.0], np.cumsum(self._durations)])
+        if isinstance(self.timing, dict):
+            self.timing = RetimeOptions(**self.timing)
+        self._timing = Timing(self.waypoints, self.max_velocity, self.max_acceleration, self.timing)
 
     # ------------------------------------------------------------------------- inspect ----
     @property
     def duration(self) -> float:
         """Total time, s."""
-        return float(self._times[-1])
+        return self._timing.duration
 
     @property
     def times(self) -> np.ndarray:
-        """Time at each waypoint, s (the robot is at rest there)."""
-        return self._times.copy()
+        """Time at which the trajectory passes each waypoint, s."""
+        return self._timing.times.copy()
+
+    @property
+    def stop_times(self) -> np.ndarray:
+        """Times at which the robot is at rest (start, sharp corners, end), s."""
+        return self._timing.times[self._timing.stops]
 
     @property
     def path_length(self) -> float:
@@ -114,16 +132,7 @@ class Plan:
 
     def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Returns (q rad, v rad/s, a rad/s^2) of the 7 arm joints at time t (clamped)."""
-        if len(self.waypoints) == 1 or t >= self.duration:
-            return self.waypoints[-1].copy(), np.zeros(7), np.zeros(7)
-        t = max(t, 0.0)
-        k = int(np.searchsorted(self._times, t, side="right") - 1)
-        k = min(k, len(self._durations) - 1)
-        s, s_dot, s_ddot = sample_segment(
-            t - self._times[k], self._durations[k], self._ramps[k], self._accels[k]
-        )
-        d = self.waypoints[k + 1] - self.waypoints[k]
-        return self.waypoints[k] + s * d, s_dot * d, s_ddot * d
+        return self._timing.sample(float(t))
 
     def sample_many(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Returns (times (M,), q (M, 7)) every dt seconds, the end included."""
@@ -136,7 +145,9 @@ class Plan:
         return _rounded(describe_scene(scene)) == _rounded(self.scene)
 
     def validate(self, scene, resolution: float = 0.01) -> None:
-        """Re-checks the path against ``scene`` (e.g. just before execution).
+        """Re-checks the path against ``scene`` (e.g. just before execution): the straight
+        segments between the waypoints, and the trajectory itself where it is smoothed (within
+        ``timing.path_tolerance`` of those segments).
 
         Args:
             scene: the ``PlanningScene`` now (its objects may have changed since planning).
@@ -148,8 +159,18 @@ class Plan:
         saved = scene.finger_positions
         scene.finger_positions = self.finger_positions
         try:
-            bad = first_invalid_segment(CheckerAdapter(scene), self.waypoints, resolution)
+            adapter = CheckerAdapter(scene)
+            bad = first_invalid_segment(adapter, self.waypoints, resolution)
             if bad is None:
+                for i, j, samples in self._timing.smoothed_paths(resolution):
+                    free = adapter.configs_free(samples)
+                    if not free.all():
+                        where = samples[int(np.argmin(free))]
+                        raise PlanningError(
+                            ErrorCode.INVALID_MOTION_PLAN,
+                            f"the smoothed motion between waypoints {i} and {j} collides: "
+                            f"{scene.describe_collisions(where)}",
+                        )
                 return
             from planning._rrt import densify
 
@@ -166,7 +187,7 @@ class Plan:
     def to_dict(self) -> dict:
         return {
             "format": _FORMAT,
-            "version": 1,
+            "version": _VERSION,
             "robot": self.robot,
             "waypoints": self.waypoints.tolist(),
             "max_velocity": self.max_velocity.tolist(),
@@ -176,6 +197,7 @@ class Plan:
             "finger_positions": self.finger_positions.tolist(),
             "scene": self.scene,
             "info": self.info,
+            "timing": dc.asdict(self.timing),
         }
 
     @classmethod
@@ -193,7 +215,10 @@ class Plan:
             "robot",
             "info",
         ]
-        return cls(**{k: data[k] for k in keys if k in data})
+        if data.get("version", 1) > _VERSION:
+            raise ValueError(f"plan file version {data['version']} is newer than {_VERSION}")
+        timing = data.get("timing", {"method": "rest_to_rest"})
+        return cls(**{k: data[k] for k in keys if k in data}, timing=RetimeOptions(**timing))
 
     def save(self, filename: Path | str) -> None:
         """Writes the plan as JSON (see the module docstring)."""
@@ -210,8 +235,15 @@ class Plan:
         return json.dumps(self.to_dict()) == json.dumps(other.to_dict())
 
     # ------------------------------------------------------------------------- display ----
-    def plot(self, filename: Path | str, dt: float = 0.01) -> None:
-        """Writes a PNG of the joint positions (rad) against time (s).
+    def plot(self, filename: Path | str, dt: float = 0.01, *, position_limits=None) -> None:
+        """Writes a PNG of the joint positions (rad), velocities (rad/s) and accelerations
+        (rad/s^2) against time (s), each joint's limits drawn as dashed lines of its colour.
+
+        Args:
+            filename: the PNG to write.
+            dt: sampling period, s.
+            position_limits: (lower (7,), upper (7,)) joint limits, rad; for a Panda plan, the
+                Panda URDF's when None (none drawn for other robots).
 
         Raises:
             RuntimeError: matplotlib is not installed.
@@ -223,15 +255,26 @@ class Plan:
             import matplotlib.pyplot as plt
         except ImportError as e:
             raise RuntimeError("Plan.plot needs matplotlib (pip install matplotlib)") from e
-        ts, qs = self.sample_many(dt)
-        fig, ax = plt.subplots(figsize=(8, 4.5))
-        for j, name in enumerate(self.robot.get("joints", ARM_JOINTS)):
-            ax.plot(ts, qs[:, j], label=name)
-        ax.plot(self._times, self.waypoints, "k.", markersize=4)
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("joint position (rad)")
-        ax.legend(fontsize=7, loc="best")
-        ax.grid(True, alpha=0.3)
+        if position_limits is None and self.robot.get("name") == "panda":
+            position_limits = _panda_position_limits()
+        ts = np.append(np.arange(0.0, self.duration, dt), self.duration)
+        samples = [np.array(x) for x in zip(*(self.sample(t) for t in ts), strict=True)]
+        limits = [position_limits, (-self.max_velocity, self.max_velocity)]
+        limits.append((-self.max_acceleration, self.max_acceleration))
+        units = ["position (rad)", "velocity (rad/s)", "acceleration (rad/s²)"]
+        fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+        for ax, values, limit, unit in zip(axes, samples, limits, units, strict=True):
+            for j, name in enumerate(self.robot.get("joints", ARM_JOINTS)):
+                (line,) = ax.plot(ts, values[:, j], label=name, linewidth=1.2)
+                if limit is not None:
+                    for bound in limit:
+                        ax.axhline(bound[j], color=line.get_color(), ls="--", lw=0.7)
+            ax.set_ylabel(f"joint {unit}")
+            ax.grid(True, alpha=0.3)
+        axes[0].plot(self.times, self.waypoints, "k.", markersize=3)
+        axes[0].set_title("dashed: limits; dots: waypoints", fontsize=9)
+        axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        axes[-1].set_xlabel("time (s)")
         fig.tight_layout()
         fig.savefig(filename, dpi=100)
         plt.close(fig)
@@ -250,6 +293,22 @@ class Plan:
                 scene.publish(q)
         finally:
             scene.finger_positions = saved
+
+
+@functools.cache
+def _panda_position_limits() -> tuple[np.ndarray, np.ndarray]:
+    """The Panda URDF's arm joint limits (lower, upper), rad."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from planning.panda_assets import panda_urdf
+
+    plant = MultibodyPlant(0.0)
+    Parser(plant).AddModels(str(panda_urdf()))
+    joints = [plant.GetJointByName(name) for name in ARM_JOINTS]
+    lower = np.array([j.position_lower_limits()[0] for j in joints])
+    upper = np.array([j.position_upper_limits()[0] for j in joints])
+    return lower, upper
 
 
 def _rounded(value):

@@ -30,11 +30,14 @@ def dut(scene):
     )
 
 
-def test_sample_passes_through_waypoints_at_rest(dut):
+def test_sample_passes_through_waypoints(dut):
     for t, q in zip(dut.times, dut.waypoints, strict=True):
-        q_t, v_t, _ = dut.sample(t)
-        np.testing.assert_allclose(q_t, q, atol=1e-9)
-        np.testing.assert_allclose(v_t, 0.0, atol=1e-9)
+        np.testing.assert_allclose(dut.sample(t)[0], q, atol=1e-7)
+    for t in dut.stop_times:
+        np.testing.assert_allclose(dut.sample(t)[1], 0.0, atol=1e-9)
+    # The corner (turning by 0.58 rad) is blended: the arm does not stop there.
+    np.testing.assert_allclose(dut.stop_times, dut.times[[0, -1]])
+    assert np.linalg.norm(dut.sample(dut.times[1])[1]) > 0.2
     np.testing.assert_allclose(dut.sample(-1.0)[0], READY)
     np.testing.assert_allclose(dut.sample(dut.duration + 1.0)[0], EXTENDED)
 
@@ -103,3 +106,83 @@ def test_replay_in_meshcat(dut):
     shown = PlanningScene(meshcat=meshcat)
     dut.replay(shown, dt=0.2, realtime=False)
     assert meshcat.HasPath("planning/objects/world/table")
+
+
+def arc_path(n=41, step=0.015, curvature=0.5):
+    """A nearly straight joint path like a Cartesian one: n waypoints step rad apart on an arc
+    of the given curvature (1/rad) in the plane of joints 1 and 2, from READY."""
+    angle = step * curvature * np.arange(n - 1)
+    steps = np.zeros((n - 1, 7))
+    steps[:, 1], steps[:, 3] = step * np.cos(angle), step * np.sin(angle)
+    return READY + np.vstack([np.zeros(7), np.cumsum(steps, axis=0)])
+
+
+def distance_to_polyline(q, waypoints):
+    a, d = waypoints[:-1], np.diff(waypoints, axis=0)
+    lam = np.clip(np.einsum("kj,kj->k", q - a, d) / np.einsum("kj,kj->k", d, d), 0.0, 1.0)
+    return np.min(np.linalg.norm(q - a - lam[:, None] * d, axis=1))
+
+
+def test_dense_path_is_timed_without_stops_within_limits_and_tolerance():
+    path = arc_path()
+    dut = mut.Plan(path, V_MAX, A_MAX)
+    stopping = mut.Plan(path, V_MAX, A_MAX, timing=mut.RetimeOptions(method="rest_to_rest"))
+    assert len(dut.stop_times) == 2
+    assert dut.duration < 0.3 * stopping.duration
+    ts = np.linspace(0.0, dut.duration, 5001)
+    q, v, a = (np.array(x) for x in zip(*(dut.sample(t) for t in ts), strict=True))
+    assert np.all(np.abs(v) <= V_MAX * (1 + 1e-6))
+    assert np.all(np.abs(a) <= A_MAX * (1 + 1e-6))
+    assert np.max(np.abs(a) / A_MAX) > 0.9  # near time-optimal: a limit is reached
+    np.testing.assert_array_equal(q[0], path[0])
+    np.testing.assert_array_equal(q[-1], path[-1])
+    np.testing.assert_allclose(v[[0, -1]], 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.gradient(q, ts, axis=0), v, atol=0.02)
+    deviation = max(distance_to_polyline(x, path) for x in q[::10])
+    assert deviation <= dut.timing.path_tolerance
+    # The trajectory passes the waypoints, in order, at ``times``.
+    assert np.all(np.diff(dut.times) > 0)
+    for t, w in zip(dut.times[::8], path[::8], strict=True):
+        np.testing.assert_allclose(dut.sample(t)[0], w, atol=1e-4)
+
+
+def test_sharp_corners_are_stops():
+    path = np.vstack([READY, READY + [0.5, 0, 0, 0, 0, 0, 0], READY + [0.5, 1.0, 0, 0, 0, 0, 0]])
+    dut = mut.Plan(path, V_MAX, A_MAX)
+    np.testing.assert_allclose(dut.stop_times, dut.times)
+    np.testing.assert_allclose(dut.sample(dut.times[1])[1], 0.0, atol=1e-9)
+
+
+def test_timing_is_deterministic_and_survives_save_and_load(tmp_path):
+    dut = mut.Plan(arc_path(), V_MAX, A_MAX)
+    dut.save(tmp_path / "plan.json")
+    loaded = mut.Plan.load(tmp_path / "plan.json")
+    assert loaded.timing == dut.timing
+    for t in np.linspace(0.0, dut.duration, 7):
+        np.testing.assert_array_equal(loaded.sample(t)[0], dut.sample(t)[0])
+
+
+def test_version_1_files_keep_their_rest_to_rest_timing(dut):
+    data = dut.to_dict()
+    data["version"] = 1
+    del data["timing"]
+    old = mut.Plan.from_dict(data)
+    assert old.timing.method == "rest_to_rest"
+    np.testing.assert_allclose(old.stop_times, old.times)
+    data["version"] = 99
+    with pytest.raises(ValueError, match="version"):
+        mut.Plan.from_dict(data)
+
+
+def test_bad_timing_options_are_rejected():
+    with pytest.raises(ValueError):
+        mut.RetimeOptions(method="fastest")
+
+
+def test_blended_corner_stays_near_the_checked_path(dut):
+    ts = np.linspace(0.0, dut.duration, 3001)
+    deviation = max(distance_to_polyline(dut.sample(t)[0], dut.waypoints) for t in ts)
+    assert deviation <= dut.timing.path_tolerance
+    assert len(dut._timing.smoothed_paths(0.01)) == 1
+    rest_to_rest = mut.Plan(dut.waypoints, V_MAX, A_MAX, timing=mut.RetimeOptions("rest_to_rest"))
+    assert dut.duration < rest_to_rest.duration
