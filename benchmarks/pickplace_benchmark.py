@@ -43,7 +43,8 @@ def summarize(label, rows):
     rtf = [r["real_time_factor"] for r in rows if r["real_time_factor"]]
     line = f"{label:<28} success {len(ok)}/{len(rows)}"
     if errors:
-        line += f"  place error median {1000 * np.median(errors):.1f} mm max {1000 * max(errors):.1f} mm"
+        median, worst = 1000 * np.median(errors), 1000 * max(errors)
+        line += f"  place error median {median:.1f} mm max {worst:.1f} mm"
     line += f"  planning median {statistics.median(planning):.3f} s"
     line += f"  RTF median {statistics.median(rtf):.2f}"
     print(line, flush=True)
