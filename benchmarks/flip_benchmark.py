@@ -40,7 +40,7 @@ def main() -> None:
     rows = []
     for _ in range(args.runs):
         run = FlipRun(scenario, robot)
-        run.advance_to(args.duration)
+        run.advance_to(args.duration, progress=True)  # A bar on a terminal only.
         row = run.report().to_dict()
         rows.append(row)
         print(" ".join(f"{fmt.format(row[key]):>12}" for _, key, fmt in COLUMNS))

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.math import RigidTransform
+from tqdm import tqdm
 
 import planning
 from drake_sim.resources import cache_dir
@@ -61,7 +62,7 @@ def bench_ik(scene, poses: int, rng) -> None:
         return
     for mode in ("pose", "position", "orientation"):
         times, solved = [], 0
-        for X_WE in targets:
+        for X_WE in tqdm(targets, desc=f"IK {mode}", leave=False, disable=None):
             kwargs = {
                 "pose": {"X_WE": X_WE},
                 "position": {"p_WE": X_WE.translation()},
@@ -112,7 +113,8 @@ def bench_mbm(scene, dataset: Path) -> None:
         folder = folder / "problems"
     rows = collections.defaultdict(lambda: collections.Counter())
     load_times = []
-    for problem in mbm.iter_problems(folder):
+    problems = list(mbm.iter_problems(folder))
+    for problem in tqdm(problems, desc="MBM problems", leave=False, disable=None):
         start = time.perf_counter()
         scene.load_moveit(problem.scene_file)
         load_times.append(time.perf_counter() - start)

@@ -24,6 +24,7 @@ from drake_sim.robot_params import load_robot_params
 from drake_sim.teleop import BUTTONS
 
 HEADLESS_DURATION = 20.0  # s, the default run length without a viewer.
+PROGRESS_MIN_DURATION = 10.0  # s simulated: shorter headless runs show no progress bar.
 
 
 def _non_negative_int(text: str) -> int:
@@ -113,7 +114,8 @@ def main(argv=None) -> int:
             meshcat.StartRecording()
     failure = None
     try:
-        run.advance_to(duration)
+        # A bar on long headless runs, on a terminal only (tqdm stays silent in logs).
+        run.advance_to(duration, progress=args.headless and duration >= PROGRESS_MIN_DURATION)
     except KeyboardInterrupt:
         pass
     except RuntimeError as e:

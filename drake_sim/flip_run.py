@@ -8,6 +8,7 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from tqdm import tqdm
 
 from diagrams.flip import make_flip_diagram
 from drake_sim.flip_controller import STATUS_FIELDS, FlipMode
@@ -89,6 +90,9 @@ def summarize(
     return figures
 
 
+PROGRESS_STEP = 0.5  # s simulated between progress-bar updates.
+
+
 class FlipRun:
     """The flipping robot's diagram and simulator, ready to advance.
 
@@ -126,13 +130,30 @@ class FlipRun:
         self.simulator.Initialize()
         self.wall_time = 0.0
 
-    def advance_to(self, t: float) -> None:
-        """Simulates until time ``t`` (s); wall time spent is added to ``wall_time``."""
+    def advance_to(self, t: float, *, progress: bool = False) -> None:
+        """Simulates until time ``t`` (s); wall time spent is added to ``wall_time``.
+
+        With ``progress``, advances in ``PROGRESS_STEP`` chunks under a progress bar on
+        stderr, shown only when stderr is a terminal (the result is the same).
+        """
         start = time.perf_counter()
         try:
-            self.simulator.AdvanceTo(t)
+            if progress and math.isfinite(t):
+                self._advance_with_bar(t)
+            else:
+                self.simulator.AdvanceTo(t)
         finally:
             self.wall_time += time.perf_counter() - start
+
+    def _advance_with_bar(self, t: float) -> None:
+        now = self.context.get_time()
+        bar_format = "{l_bar}{bar}| {n:.1f}/{total:.1f} simulated s [{elapsed}<{remaining}]"
+        with tqdm(total=t - now, leave=False, disable=None, bar_format=bar_format) as bar:
+            while now < t:
+                step_end = min(t, now + PROGRESS_STEP)
+                self.simulator.AdvanceTo(step_end)
+                bar.update(step_end - now)
+                now = step_end
 
     def log(self, name: str):
         """The ``VectorLog`` of a logged signal (see ``diagrams.flip.LOGGED``)."""
