@@ -77,25 +77,30 @@ def cartesian_path(
     distance = np.linalg.norm(X_WG.translation() - X_WS.translation())
     angle = (X_WS.rotation().inverse() @ X_WG.rotation()).ToAngleAxis().angle()
     steps = max(1, int(np.ceil(max(distance / max_step, angle / max_rotation_step))))
-    path, q = [np.asarray(q_start, float)], np.asarray(q_start, float)
+    # Every IK step first (cheap), then one batched collision check of the whole line.
+    path, q, reason = [np.asarray(q_start, float)], np.asarray(q_start, float), ""
     for k in range(1, steps + 1):
         target = interpolate_pose(X_WS, X_WG, k / steps)
         q_next = _solve_step(scene, adapter, plant, context, frame, q, target)
-        reason = ""
         if q_next is None:
             reason = "no IK solution near the previous step (joint limit or singularity)"
         elif np.max(np.abs(q_next - q)) > jump_threshold:
             reason = f"joint jump above {jump_threshold} rad"
-        else:
-            samples, _ = densify(np.vstack([q, q_next]), resolution)
-            if not adapter.configs_free(samples).all():
-                bad = samples[np.argmin(adapter.configs_free(samples))]
-                reason = f"collision: {scene.describe_collisions(bad)}"
         if reason:
-            return CartesianPath(np.asarray(path), (k - 1) / steps, reason)
+            break
         path.append(q_next)
         q = q_next
-    return CartesianPath(np.asarray(path), 1.0, "")
+    path = np.asarray(path)
+    if len(path) > 1:
+        samples, segment = densify(path, resolution)
+        free = adapter.configs_free(samples)
+        if not free.all():
+            first = int(np.argmin(free))
+            path = path[: segment[first] + 1]  # up to the step before the colliding segment
+            reason = f"collision: {scene.describe_collisions(samples[first])}"
+    if reason:
+        return CartesianPath(path, (len(path) - 1) / steps, reason)
+    return CartesianPath(path, 1.0, "")
 
 
 def _pose(plant, context, frame, q_full) -> RigidTransform:
