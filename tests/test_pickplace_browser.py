@@ -1,0 +1,68 @@
+"""The user's path through the browser: ``python -m drake_sim.pickplace`` with a viewer waits
+for the Meshcat "Pick" button; a click in the live page runs the task (headless Chromium)."""
+
+import io
+import json
+import re
+import select
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from PIL import Image
+
+from drake_sim.browser import HeadlessBrowser
+from tests.browser_helpers import assert_not_blank, require_chromium
+
+COUNT_MESHES = "(() => { let n = 0; viewer.scene.traverse(o => { n += !!o.isMesh; }); return n })()"
+CLICK_PICK = """(() => {
+  const label = Array.from(document.querySelectorAll('.property-name'))
+      .find(e => e.textContent.trim() === 'Pick');
+  if (!label) return false;
+  label.closest('li').click();
+  return true;
+})()"""
+
+
+def read_line_matching(process, pattern: str, timeout: float) -> str:
+    """Reads the process's stdout until a line matches ``pattern`` (seconds of wall time)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([process.stdout], [], [], 1.0)
+        if ready:
+            line = process.stdout.readline()
+            if re.search(pattern, line):
+                return line
+            if not line and process.poll() is not None:
+                break
+    raise AssertionError(f"no line matching {pattern!r} (exit code {process.poll()})")
+
+
+@pytest.mark.browser
+def test_pick_button_in_the_live_page_runs_the_task(tmp_path):
+    require_chromium()
+    report = tmp_path / "report.json"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "drake_sim.pickplace", "--mode", "kinematic", "--report", report],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        url = re.search(r"http://\S+", read_line_matching(process, "press 'Pick'", 120)).group(0)
+        with HeadlessBrowser(size=(640, 400), timeout=60.0) as browser:
+            browser.open(url)
+            browser.wait_for(f"{COUNT_MESHES} > 20", timeout=60.0)  # the Panda's links are in
+            browser.wait_for(CLICK_PICK, timeout=30.0)
+            read_line_matching(process, "^success", 300)
+            picture = Image.open(io.BytesIO(browser.screenshot())).convert("RGB")
+        assert_not_blank(picture)
+        process.send_signal(signal.SIGINT)  # the viewer keeps running until Ctrl-C
+        assert process.wait(timeout=60) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+    data = json.loads(report.read_text())
+    assert data["success"] and data["place_error_m"] < 0.02
