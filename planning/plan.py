@@ -162,15 +162,14 @@ class Plan:
             adapter = CheckerAdapter(scene)
             bad = first_invalid_segment(adapter, self.waypoints, resolution)
             if bad is None:
-                for i, j, samples in self._timing.smoothed_paths(resolution):
-                    free = adapter.configs_free(samples)
-                    if not free.all():
-                        where = samples[int(np.argmin(free))]
-                        raise PlanningError(
-                            ErrorCode.INVALID_MOTION_PLAN,
-                            f"the smoothed motion between waypoints {i} and {j} collides: "
-                            f"{scene.describe_collisions(where)}",
-                        )
+                collision = self.smoothing_collision(adapter, resolution)
+                if collision is not None:
+                    (i, j), where = collision
+                    raise PlanningError(
+                        ErrorCode.INVALID_MOTION_PLAN,
+                        f"the smoothed motion between waypoints {i} and {j} collides: "
+                        f"{scene.describe_collisions(where)}",
+                    )
                 return
             from planning._rrt import densify
 
@@ -182,6 +181,23 @@ class Plan:
             )
         finally:
             scene.finger_positions = saved
+
+    def smoothing_collision(self, adapter, resolution: float = 0.01):
+        """Checks where the trajectory leaves the straight segments (its smoothed sections).
+
+        Args:
+            adapter: a collision adapter (``configs_free``) on the scene, fingers as planned.
+            resolution: rad between checked configurations.
+
+        Returns:
+            None when those sections are collision-free, else ``((i, j), q)``: the section's
+            first and last waypoint and a colliding configuration.
+        """
+        for i, j, samples in self._timing.smoothed_paths(resolution):
+            free = adapter.configs_free(samples)
+            if not free.all():
+                return (i, j), samples[int(np.argmin(free))]
+        return None
 
     # --------------------------------------------------------------------------- files ----
     def to_dict(self) -> dict:
