@@ -11,7 +11,8 @@ The steps (each reported as it ends, with its planning time):
    PlanningScene (from here on the planner keeps it clear of the world);
 7. ``move_to_place``: plan over the obstacle to above the place target, then a Cartesian line
    down until the object is just above the table;
-8. ``release``: open, detach the object into the scene at its measured pose, retreat up.
+8. ``release``: open, detach the object, retreat straight up (ignoring the object, which may
+   still touch the open fingers), and put the object into the scene where it came to rest.
 
 Before moving, ``check`` (reported as step 0, its time counted as planning) looks for reasons
 the task cannot work: no object or place target, an object too wide for the hand, an object or a
@@ -125,6 +126,7 @@ class PickPlaceTask:
         self.options = options or PickPlaceOptions()
         self._on_step = on_step
         self._grasp: RigidTransform | None = None  # X_OG of the chosen top-down grasp
+        self._scene_object: SceneObject | None = None  # the object as the scene had it
 
     # ---------------------------------------------------------------------- feasibility ----
     def check(self) -> str | None:
@@ -324,6 +326,7 @@ class PickPlaceTask:
         scene, q = self._scene, self._mpi.state.q
         obj = scene.world_objects[OBJECT]
         X_WO = self._object_pose()
+        self._scene_object = obj
         scene.remove_object(OBJECT)
         X_AO = scene.attachment_pose(q).inverse() @ X_WO
         scene.attach_new(SceneObject(OBJECT, "box", tuple(obj.size), X_AO))
@@ -346,5 +349,12 @@ class PickPlaceTask:
         self._gripper(FINGER_OPEN)
         scene = self._scene
         scene.detach(OBJECT, self._mpi.state.q)
-        scene.move_object(OBJECT, self._object_pose())
-        return self._cartesian_up(self.options.retreat_height)
+        # The released object may still touch the open hand (it can tip against a finger as it
+        # settles): like MoveIt's retreat with the object's touch links allowed, the straight
+        # retreat up ignores the object, which goes back into the scene where it came to rest.
+        scene.remove_object(OBJECT)
+        try:
+            return self._cartesian_up(self.options.retreat_height)
+        finally:
+            obj = self._scene_object
+            scene.add_object(obj.with_pose(self._object_pose()))
