@@ -20,11 +20,14 @@ class MotionPlannerOptions:
     seed: int = 0  # seed of np.random.default_rng, fresh for each request
     rrt_step: float = 0.5  # rad, largest RRT-Connect extension (joint-space L2)
     goal_bias: float = 0.05  # probability of sampling the other tree's root
+    rrt_batch: int = 8  # RRT-Connect extensions per collision query (1: one at a time)
     rrt_restart_interval: float = 10.0  # s, RRT-Connect restarts with new trees after this
     shortcut_iterations: int = 20  # random shortcut attempts after the greedy pass
     shortcut_time_fraction: float = 0.2  # share of the remaining time shortcutting may use
     validation_resolution: float = 0.01  # rad between fine checks of every returned path
     max_repairs: int = 3  # segments re-planned with fine edge checks when validation fails
+    repair_timeout: float = 0.5  # s per segment repair attempt; then the whole path is re-planned
+    repair_step: float = 0.25  # rad, RRT-Connect extension when repairing (tight spots)
     ik_solutions: int = 4  # distinct IK solutions tried for a pose goal
     cartesian_step: float = 0.005  # m per Cartesian step
     cartesian_rotation_step: float = 0.05  # rad per Cartesian step
@@ -41,6 +44,16 @@ class MotionPlannerOptions:
     # result when it passes the fine check and is shorter. Off: measured about 1 s more per MBM
     # problem, and only 4 of 13 results passed the 0.01 rad check.
     refine_with_kto: bool = False
+    # Answer collision queries with sphere models of the robot first (planning._spheres), and
+    # ask Drake's checker only where the spheres cannot decide.
+    sphere_checks: bool = True
+    sphere_slack: float = 0.015  # m, how far spheres may bulge beyond the link meshes
+    # s into a search before Drake is asked about what the spheres cannot decide (until then
+    # that counts as colliding); validation always asks Drake.
+    drake_fallback_delay: float = 0.2
+    # rad between collision samples of the search's edges with sphere checks (the returned path
+    # is validated at validation_resolution in any case).
+    search_resolution: float = 0.1
 
 
 def load_planner_options(filename: Path | str | None = None) -> MotionPlannerOptions:
@@ -58,12 +71,18 @@ def check_options(options: MotionPlannerOptions) -> None:
         "rrt_restart_interval",
         "validation_resolution",
         "cartesian_step",
+        "sphere_slack",
+        "search_resolution",
+        "repair_timeout",
+        "repair_step",
     )
     bad = [name for name in positive if getattr(options, name) <= 0.0]
     if not (0.0 < options.velocity_scaling <= 1.0 and 0.0 < options.acceleration_scaling <= 1.0):
         bad.append("velocity_scaling/acceleration_scaling (must be in (0, 1])")
     if len(options.max_velocity) != 7 or len(options.max_acceleration) != 7:
         bad.append("max_velocity/max_acceleration (7 values each)")
+    if options.rrt_batch < 1 or options.drake_fallback_delay < 0.0:
+        bad.append("rrt_batch (at least 1)/drake_fallback_delay (not negative)")
     if options.validation_resolution > 0.01:
         bad.append("validation_resolution (at most 0.01 rad)")
     if bad:

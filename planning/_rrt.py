@@ -1,8 +1,10 @@
 """Joint-space path planning on Drake's collision checker: RRT-Connect, shortcutting, checks.
 
 All paths here are arrays of shape (N, 7): arm joint waypoints (rad) whose straight-line
-interpolation is the path; the fingers stay at the scene's positions. Collision queries go to
-the scene's ``SceneGraphCollisionChecker`` (so objects added at run time are seen):
+interpolation is the path; the fingers stay at the scene's positions. ``CheckerAdapter`` sends
+collision queries to the scene's ``SceneGraphCollisionChecker`` (so objects added at run time
+are seen; ``planning._sphere_checker.SphereCheckerAdapter`` answers the same queries with
+sphere models first):
 ``CheckEdgeCollisionFree`` at the checker's edge step while searching, and
 ``CheckConfigsCollisionFree`` (parallel over both cores) at a fine step to validate.
 
@@ -89,6 +91,27 @@ class CheckerAdapter:
         if self._resolution is not None:
             self._proven.add(_edge_key(q_a, q_b))
         return True
+
+    def free_prefix(self, q_a, q_b) -> float:
+        """Returns the fraction t in [0, 1] of the segment from q_a (known free) towards q_b
+        that is collision-free at the edge step: samples at most a step apart from q_a up to
+        q_a + t (q_b - q_a) are free, the next one is not (1 when all are free)."""
+        step = self._resolution or self._checker.edge_step_size()
+        n = max(1, int(np.ceil(np.linalg.norm(q_b - q_a) / step)))
+        t = np.arange(1, n + 1) / n
+        samples = q_a + t[:, None] * (q_b - q_a)
+        chunk = 4
+        for start in range(0, n, chunk):
+            free = self.configs_free(samples[start : start + chunk])
+            if not free.all():
+                first = start + int(np.argmin(free))
+                return float(t[first - 1]) if first > 0 else 0.0
+            chunk *= 2
+        return 1.0
+
+    def free_prefixes(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """``free_prefix`` of many segments (rows of q_a and q_b), (K,)."""
+        return np.array([self.free_prefix(a, b) for a, b in zip(q_a, q_b, strict=True)])
 
     @property
     def resolution(self) -> float | None:
@@ -251,17 +274,23 @@ def _extend(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None
 
 
 def _connect(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | None:
-    """Extends ``tree`` towards target until it gets there (returns the node) or is blocked."""
+    """Extends ``tree`` towards target until it gets there (returns the node) or is blocked.
+
+    The whole line to the target is checked in one ``free_prefix`` query; nodes are then
+    added every ``step`` along its free part (all of it checked at the edge step)."""
     index = tree.nearest(target)
-    while True:
-        q_new, dist = _steer(tree.q[index], target, step)
-        if dist < 1e-9:
-            return index
-        if not adapter.edge_free(tree.q[index], q_new):
-            return None
-        index = tree.add(q_new, index)
-        if dist <= step:
-            return index
+    q_near = tree.q[index]
+    dist = float(np.linalg.norm(target - q_near))
+    if dist < 1e-9:
+        return index
+    reach = adapter.free_prefix(q_near, target) * dist
+    for k in range(1, int(np.floor(reach / step + 1e-9)) + 1):
+        if k * step >= dist - 1e-9:
+            break
+        index = tree.add(q_near + (target - q_near) * (k * step / dist), index)
+    if reach >= dist - 1e-9:
+        return tree.add(target.copy(), index)
+    return None
 
 
 def _drop_duplicates(path: np.ndarray) -> np.ndarray:
@@ -276,49 +305,73 @@ def shortcut(
     iterations: int,
     deadline: float,
     rng: np.random.Generator,
+    batch: int = 8,
 ) -> np.ndarray:
     """Shortens a collision-free path: greedy vertex skipping, then random shortcuts.
 
     The greedy pass joins each waypoint to the farthest later waypoint it sees in a straight
-    line; the random pass picks two points along the path (by arc length) and replaces the part
-    between them by a straight segment when that is collision-free.
+    line (all candidates of a waypoint in one query); the random pass draws ``batch`` pairs of
+    points along the path (by arc length) at a time, checks their straight segments in one
+    query, and replaces the parts between them by the collision-free segments, largest
+    shortening first, as long as the replaced parts do not overlap.
 
     Returns:
         the shorter path (the input when nothing helped), same ends.
     """
     path = _greedy(adapter, path, deadline)
-    for _ in range(iterations):
+    for _ in range(int(np.ceil(iterations / batch))):
         if len(path) < 3 or time.perf_counter() > deadline:
             break
         cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
-        s_a, s_b = np.sort(rng.uniform(0.0, cum[-1], 2))
-        i, j = np.searchsorted(cum, s_a, "right") - 1, np.searchsorted(cum, s_b, "right") - 1
-        if i == j:
+        s = np.sort(rng.uniform(0.0, cum[-1], (batch, 2)), axis=1)
+        seg = np.clip(np.searchsorted(cum, s, "right") - 1, 0, len(path) - 2)
+        keep = seg[:, 0] < seg[:, 1]
+        if not keep.any():
             continue
-        q_a = _point(path, cum, i, s_a)
-        q_b = _point(path, cum, j, s_b)
-        if not adapter.edge_free(q_a, q_b):
-            continue
-        new = np.vstack([path[: i + 1], q_a, q_b, path[j + 1 :]])
-        if path_length(new) < path_length(path) - 1e-9:
-            path = _drop_duplicates(new)
+        s, seg = s[keep], seg[keep]
+        q = [_points(path, cum, seg[:, k], s[:, k]) for k in (0, 1)]
+        gain = (s[:, 1] - s[:, 0]) - np.linalg.norm(q[1] - q[0], axis=1)
+        free = (adapter.free_prefixes(q[0], q[1]) >= 1.0) & adapter.configs_free(q[0])
+        chosen: list[int] = []
+        for k in np.argsort(-gain):
+            apart = all(s[k, 1] <= s[c, 0] or s[k, 0] >= s[c, 1] for c in chosen)
+            if free[k] and gain[k] > 1e-9 and apart:
+                chosen.append(int(k))
+        if chosen:
+            path = _splice(path, cum, [(s[k], q[0][k], q[1][k]) for k in chosen])
     return _greedy(adapter, path, deadline)
 
 
-def _point(path, cum, i, s) -> np.ndarray:
+def _points(path, cum, i, s) -> np.ndarray:
+    """Points at arc lengths s on segments i (arrays), (K, 7)."""
     length = cum[i + 1] - cum[i]
-    t = 0.0 if length <= 0 else (s - cum[i]) / length
-    return path[i] + t * (path[i + 1] - path[i])
+    t = np.where(length > 0, (s - cum[i]) / np.where(length > 0, length, 1.0), 0.0)
+    return path[i] + t[:, None] * (path[i + 1] - path[i])
+
+
+def _splice(path, cum, cuts) -> np.ndarray:
+    """Replaces the parts of the path between arc lengths (s_a, s_b) by straight segments
+    q_a -> q_b, for non-overlapping cuts [((s_a, s_b), q_a, q_b), ...]."""
+    out, done = [], -1.0
+    for (s_a, s_b), q_a, q_b in sorted(cuts, key=lambda c: c[0][0]):
+        out.extend(path[(cum > done) & (cum < s_a)])
+        out.extend([q_a, q_b])
+        done = s_b
+    out.extend(path[cum > done])
+    out = [path[0], *out] if done < 0 or not np.allclose(out[0], path[0]) else out
+    return _drop_duplicates(np.asarray(out))
 
 
 def _greedy(adapter, path: np.ndarray, deadline: float) -> np.ndarray:
     out, i = [path[0]], 0
     while i < len(path) - 1:
-        j = len(path) - 1
-        while j > i + 1 and (
-            time.perf_counter() > deadline or not adapter.edge_free(path[i], path[j])
-        ):
-            j -= 1
+        j = i + 1
+        if j < len(path) - 1 and time.perf_counter() <= deadline:
+            later = np.arange(i + 2, len(path))
+            starts = np.repeat(path[i][None, :], len(later), axis=0)
+            free = np.flatnonzero(adapter.free_prefixes(starts, path[later]) >= 1.0)
+            if len(free):
+                j = int(later[free[-1]])
         out.append(path[j])
         i = j
     return np.asarray(out)

@@ -3,17 +3,22 @@
 Usage (DESIGN.md, "python -m planning.benchmark")::
 
     python -m planning.benchmark --dataset ../shared/benchmarks/mbm_panda --limit 5 \\
-        --timeout 5 --report report.json [--families box_panda cage_panda] [--compare-ompl]
+        --timeout 5 --report report.json [--families box_panda cage_panda] [--compare-ompl] \\
+        [--plot times.png]
 
 ``--dataset`` is a ``problems`` folder, a folder holding ``problems.tar.bz2`` (unpacked once into
 the cache) or the archive itself. For each problem the scene is loaded, the fingers are set to the
 request's positions, and the start and goal are checked (``valid``: in limits and collision-free
-under our model); valid problems are planned with ``MotionPlanner.plan_to_joints`` and timed from
-request to validated path. Each report row has ``family``, ``problem``, ``valid``, ``success``,
+under our model); valid problems are planned with ``MotionPlanner.plan_path`` (the checks and the
+search of ``plan_to_joints``, without the time parametrisation) and timed from request to
+validated path. Each report row has ``family``, ``problem``, ``valid``, ``success``,
 ``time_s``, ``path_length`` (joint-space L2, rad), ``path_valid_fine`` (re-checked here at
 0.01 rad), ``path`` (7-joint waypoints, straight-line interpolation), and ``planner``/``error``;
 with ``--compare-ompl`` also ``ompl_success``, ``ompl_time_s``, ``ompl_path_length``,
 ``ompl_path_valid_fine`` (OMPL RRTConnect plus simplification on the same checker).
+``--plot FILE`` writes a PNG with histograms of the times per problem (log scale), ours and
+OMPL's. A progress bar (tqdm, when installed) runs on stderr. Paths are re-checked with Drake's
+checker alone (``_rrt.CheckerAdapter``), whatever collision model the planner used.
 Exit code 0 when the run completed, 2 on bad input.
 """
 
@@ -70,9 +75,9 @@ def run_problem(scene, planner, problem, timeout: float) -> dict:
         return row
     start = time.perf_counter()
     try:
-        result = planner.plan_to_joints(q_goal, q_start=q_start, timeout=timeout)
-        path = result.trajectory.waypoints
-        row.update(success=True, planner=result.trajectory.info["planner"])
+        # The validated joint path, as OMPL's below (no time parametrisation).
+        path, how = planner.plan_path(q_start, q_goal, timeout=timeout)
+        row.update(success=True, planner=how)
     except PlanningError as e:
         path = None
         row["error"] = f"{e.code.name}: {e.message}"
@@ -150,6 +155,9 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--compare-ompl", action="store_true", help="also run OMPL RRTConnect+simplify"
     )
+    parser.add_argument(
+        "--plot", type=Path, default=None, help="PNG with histograms of the times (matplotlib)"
+    )
     args = parser.parse_args(argv)
     unknown = sorted(set(args.families) - set(mbm.FAMILIES))
     if unknown or args.timeout <= 0 or (args.limit is not None and args.limit < 1):
@@ -172,23 +180,91 @@ def main(argv=None) -> int:
     planner = MotionPlanner(scene, options)
     rows = []
     problems = list(mbm.iter_problems(folder, args.families, args.limit))
+    bar = _progress(len(problems) * (2 if args.compare_ompl else 1))
     for problem in problems:
         rows.append(run_problem(scene, planner, problem, args.timeout))
         row = rows[-1]
-        print(
+        bar.write(
             f"{row['family']} {row['problem']:4d} valid={row['valid']} "
-            f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}",
-            flush=True,
+            f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}"
         )
+        bar.update()
     if args.compare_ompl:
         # After all of ours: running OMPL in between was measured to slow our planner 2-3x.
         for problem, row in zip(problems, rows, strict=True):
             if row["valid"]:
                 run_ompl(scene, problem, row, args.timeout)
+            bar.update()
+    bar.close()
     print(summarize(rows))
     if args.report is not None:
         args.report.write_text(json.dumps(rows, indent=1))
+    if args.plot is not None:
+        plot_times(rows, args.plot)
     return 0
+
+
+class _PlainProgress:
+    """Stands in for a tqdm bar when tqdm is not installed: prints lines, counts nothing."""
+
+    def write(self, line: str) -> None:
+        print(line, flush=True)
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _progress(total: int):
+    """A tqdm progress bar on stderr (its lines on stdout), or plain printing without tqdm."""
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return _PlainProgress()
+
+    class _Bar(tqdm):
+        def write(self, line: str) -> None:  # tqdm.write keeps the bar below the lines
+            tqdm.write(line, file=sys.stdout)
+
+    return _Bar(total=total, file=sys.stderr, unit="problem", dynamic_ncols=True)
+
+
+def plot_times(rows: list[dict], filename: Path) -> None:
+    """Writes a PNG with histograms of the time per valid problem, ours and OMPL's (when in
+    the rows), on a log time axis; unsolved problems count at their time (the timeout)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    series = {"ours": [r["time_s"] for r in rows if r["valid"] and r["time_s"]]}
+    ompl = [r["ompl_time_s"] for r in rows if r["valid"] and r.get("ompl_time_s")]
+    if ompl:
+        series["OMPL RRTConnect + simplify"] = ompl
+    every = [t for times in series.values() for t in times]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    if every:
+        bins = np.geomspace(min(every) * 0.9, max(every) * 1.1, 30)
+        for label, times in series.items():
+            solved = "success" if label == "ours" else "ompl_success"
+            count = sum(bool(r.get(solved)) for r in rows if r["valid"])
+            ax.hist(
+                times,
+                bins=bins,
+                alpha=0.6,
+                label=f"{label}: median {np.median(times) * 1e3:.0f} ms, "
+                f"solved {count}/{len(times)}",
+            )
+    ax.set_xscale("log")
+    ax.set_xlabel("time per problem, s (log scale)")
+    ax.set_ylabel("problems")
+    ax.set_title("MotionBenchMaker Panda problems")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(filename, dpi=120)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

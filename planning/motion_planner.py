@@ -1,10 +1,14 @@
 """MotionPlanner: joint, named, pose and Cartesian goals on a ``PlanningScene``.
 
 Every request checks its start and goal (limits, finite values, collisions naming the bodies),
-then finds a joint path: the straight line when it is collision-free, else RRT-Connect on the
-scene's ``SceneGraphCollisionChecker`` followed by shortcutting (``planning._rrt``). Every path is
-re-checked at ``validation_resolution`` (0.01 rad) before it is returned; a segment failing that
-check is re-planned with edges checked at that resolution. The path is then timed rest to rest
+then finds a joint path: the straight line when it is collision-free, else RRT-Connect (batched,
+``planning._rrt_batch``) followed by shortcutting (``planning._rrt``). Collision queries go to
+conservative sphere models of the robot first (``planning._sphere_checker``: what they prove
+free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` for what they
+cannot decide. Every path is re-checked at ``validation_resolution`` (0.01 rad) before it is
+returned, accepting a configuration only when the spheres prove it free or Drake's checker
+finds it free; a segment failing that check is re-planned with edges checked at that
+resolution. The path is then timed rest to rest
 within the scaled velocity and acceleration limits (``planning._retime``) into a ``Plan``.
 
 Requests start from the planner's ``RobotState`` (its current q; MoveIt's "current state")
@@ -24,6 +28,7 @@ from planning._planner_options import (
     check_options,
     load_planner_options,
 )
+from planning._retime import RetimeOptions
 from planning._rrt import (
     CheckerAdapter,
     first_invalid_segment,
@@ -31,6 +36,8 @@ from planning._rrt import (
     rrt_connect,
     shortcut,
 )
+from planning._rrt_batch import rrt_connect_batch
+from planning._sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.errors import ErrorCode, PlanningError
 from planning.plan import Plan, describe_scene
 from planning.robot_state import RobotState
@@ -75,6 +82,8 @@ class MotionPlanner:
         self._options = options if options is not None else load_planner_options()
         check_options(self._options)
         self._state = state if state is not None else RobotState(scene)
+        if self._options.sphere_checks:  # covers are made (or read from the cache) here, once
+            sphere_model(scene, self._options.sphere_slack)
 
     @property
     def scene(self):
@@ -259,10 +268,26 @@ class MotionPlanner:
             )
 
     # --------------------------------------------------------------------------- search ----
+    def _adapter(self, resolution: float | None = None, *, search: bool = False):
+        """Collision queries: sphere models first when enabled (``planning._sphere_checker``).
+        A search adapter leaves Drake out for ``drake_fallback_delay`` s (what the spheres
+        cannot decide counts as colliding), then asks it too; a validating one always does,
+        so validation accepts exactly what Drake's checker accepts."""
+        opts = self._options
+        if not opts.sphere_checks:
+            return CheckerAdapter(self._scene, resolution)
+        after = None
+        if search:
+            after = time.perf_counter() + opts.drake_fallback_delay
+            resolution = opts.search_resolution
+        return SphereCheckerAdapter(
+            self._scene, resolution, slack=opts.sphere_slack, fallback_after=after
+        )
+
     def _find_path(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
         opts = self._options
-        adapter = CheckerAdapter(self._scene)
-        fine = CheckerAdapter(self._scene, opts.validation_resolution)
+        adapter = self._adapter(search=True)
+        fine = self._adapter(opts.validation_resolution)
         rng = np.random.default_rng(opts.seed)
         how = "straight"
         path = np.vstack([q_start, q_goal])
@@ -271,12 +296,10 @@ class MotionPlanner:
             path = None
             while path is None and time.perf_counter() < deadline:
                 # Restart with fresh trees now and then: RRT run times are heavy-tailed.
-                path = rrt_connect(
+                path = self._rrt(
                     adapter,
                     q_start,
                     q_goal,
-                    step=opts.rrt_step,
-                    goal_bias=opts.goal_bias,
                     deadline=min(deadline, time.perf_counter() + opts.rrt_restart_interval),
                     rng=rng,
                 )
@@ -295,6 +318,15 @@ class MotionPlanner:
             path, how = self._refined(path, how)
         return path, how
 
+    def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
+        """RRT-Connect, batched (``planning._rrt_batch``) when ``rrt_batch`` > 1."""
+        opts = self._options
+        step = step or opts.rrt_step
+        kwargs = dict(step=step, goal_bias=opts.goal_bias, deadline=deadline, rng=rng)
+        if opts.rrt_batch > 1:
+            return rrt_connect_batch(adapter, q_a, q_b, batch=opts.rrt_batch, **kwargs)
+        return rrt_connect(adapter, q_a, q_b, **kwargs)
+
     def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
         from planning._kto import kto_refine
 
@@ -302,14 +334,16 @@ class MotionPlanner:
         if dense is None or path_length(dense) >= path_length(path):
             return path, how
         resolution = self._options.validation_resolution
-        if first_invalid_segment(CheckerAdapter(self._scene), dense, resolution) is not None:
+        if first_invalid_segment(self._adapter(), dense, resolution) is not None:
             return path, how
         return dense, how + "+kto"
 
     def _validated(self, fine, path, how, deadline, rng) -> tuple[np.ndarray, str]:
         """Re-checks the path at the fine resolution; re-plans a failing segment with
         RRT-Connect on fine edge checks (whose edges are then not checked twice), at most
-        ``max_repairs`` times."""
+        ``max_repairs`` times. When a segment cannot be repaired within ``repair_timeout``
+        (its ends sit in a tight spot), the whole path is re-planned and shortened with fine
+        edge checks instead."""
         opts = self._options
         for _ in range(opts.max_repairs + 1):
             bad = first_invalid_segment(fine, path, opts.validation_resolution)
@@ -317,19 +351,31 @@ class MotionPlanner:
                 return path, how
             # Measured: a fine-checked RRT-Connect between the segment's ends (usually a few
             # nodes) beats random two-segment detours, whose candidates mostly graze too.
-            piece = rrt_connect(
+            piece = None
+            for step in (opts.rrt_step, opts.repair_step):  # long steps first, then short
+                local = min(deadline, time.perf_counter() + opts.repair_timeout)
+                piece = self._rrt(
+                    fine, path[bad], path[bad + 1], deadline=local, rng=rng, step=step
+                )
+                if piece is not None:
+                    break
+            if piece is not None:
+                path = np.vstack([path[:bad], piece, path[bad + 2 :]])
+                how += "+repaired"
+                continue
+            step = opts.repair_step
+            whole = self._rrt(fine, path[0], path[-1], deadline=deadline, rng=rng, step=step)
+            if whole is None:
+                break
+            budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
+            path = shortcut(
                 fine,
-                path[bad],
-                path[bad + 1],
-                step=opts.rrt_step,
-                goal_bias=opts.goal_bias,
-                deadline=deadline,
+                whole,
+                iterations=opts.shortcut_iterations,
+                deadline=time.perf_counter() + budget,
                 rng=rng,
             )
-            if piece is None:
-                break
-            path = np.vstack([path[:bad], piece, path[bad + 2 :]])
-            how += "+repaired"
+            how += "+replanned"
         raise self._failure(deadline, "no path passed the fine collision check")
 
     @staticmethod
@@ -345,7 +391,7 @@ class MotionPlanner:
 
     def _make_plan(self, path: np.ndarray, how: str, t0: float) -> Plan:
         opts = self._options
-        return Plan(
+        plan = Plan(
             waypoints=path,
             max_velocity=np.asarray(opts.max_velocity) * opts.velocity_scaling,
             max_acceleration=np.asarray(opts.max_acceleration) * opts.acceleration_scaling,
@@ -359,3 +405,9 @@ class MotionPlanner:
                 "path_length": path_length(path),
             },
         )
+        # The timing rounds gentle corners within 2 mrad of the checked path: check those
+        # sections too, and where they graze something, stop at the waypoints instead.
+        resolution = opts.validation_resolution
+        if plan.smoothing_collision(self._adapter(resolution), resolution) is not None:
+            plan = dc.replace(plan, timing=RetimeOptions(method="rest_to_rest"))
+        return plan

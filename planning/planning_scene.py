@@ -67,6 +67,7 @@ class PlanningScene:
         # A context of our own to name colliding geometries and evaluate poses.
         self._context = self._checker.MakeStandaloneModelContext()
         self._geometry_names: dict[GeometryId, str] = {}
+        self.version = 0  # bumped by every change of objects, fingers or allowed pairs
         # The checker filters body pairs: declare the SRDF's pairs there too, so that shapes
         # added later (held objects on the attachment body) are filtered as well.
         for link_a, link_b in disabled_collision_pairs(options):
@@ -117,6 +118,7 @@ class PlanningScene:
         if not np.all(np.isfinite(value)):
             raise ValueError(f"finger positions must be finite, got {value}")
         self._finger_positions = value
+        self.version += 1
 
     def full_q(self, q) -> np.ndarray:
         """Returns the plant's 9 positions for a 7-joint arm q (fingers added) or a 9-vector.
@@ -320,6 +322,7 @@ class PlanningScene:
             bodies.append(self.plant.GetBodyByName(name, self._model.instance).index())
         if bodies[0] != bodies[1]:
             self._checker.SetCollisionFilteredBetween(bodies[0], bodies[1], True)
+            self.version += 1
 
     def load_yaml(self, filename) -> None:
         """Replaces the world objects by those of our scene YAML (``scene_io``)."""
@@ -350,6 +353,7 @@ class PlanningScene:
         return self.plant.GetBodyByName(ATTACHMENT_BODY, self._model.instance)
 
     def _add_geometry(self, group: str, body, obj: SceneObject) -> None:
+        self.version += 1
         inspector = self._context.GetQueryObject().inspector()
         before = set(inspector.GetAllGeometryIds())
         if not self._checker.AddCollisionShapeToBody(group, body, obj.drake_shape(), obj.X_PO):
@@ -359,6 +363,7 @@ class PlanningScene:
             self._geometry_names[geometry_id] = obj.name
 
     def _remove_geometry(self, group: str) -> None:
+        self.version += 1
         name = group.split("/", 1)[1]
         self._checker.RemoveAllAddedCollisionShapes(group)
         self._geometry_names = {k: v for k, v in self._geometry_names.items() if v != name}

@@ -95,3 +95,34 @@ def test_summary_table():
     ]
     table = mut.summarize(rows)
     assert "f " in table and "100.0" in table and "2.00" in table
+
+
+def test_plot_writes_a_png(tmp_path):
+    pytest.importorskip("matplotlib")
+    rows = [
+        {"family": "f", "problem": k, "valid": True, "success": True, "time_s": 0.05 * k}
+        | {"ompl_success": k > 1, "ompl_time_s": 0.2 * k}
+        for k in range(1, 6)
+    ]
+    rows.append({"family": "f", "problem": 6, "valid": False, "success": False, "time_s": None})
+    out = tmp_path / "times.png"
+    mut.plot_times(rows, out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_progress_falls_back_to_plain_lines(monkeypatch, capsys):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_tqdm(name, *args, **kwargs):
+        if name == "tqdm":
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_tqdm)
+    bar = mut._progress(3)
+    bar.write("one line")
+    bar.update()
+    bar.close()
+    assert "one line" in capsys.readouterr().out
