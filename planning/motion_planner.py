@@ -84,6 +84,44 @@ class MotionPlanner:
         self._state = state if state is not None else RobotState(scene)
         if self._options.sphere_checks:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.sphere_slack)
+        self._gcs = None  # (GcsPlanner, RegionSet, RegionOptions) after use_gcs()
+
+    def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
+        """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
+
+        While the scene is the one the regions were grown in (same cache key), a request whose
+        straight line collides tries GCS (``planning._gcs``) before RRT-Connect; its path is
+        validated like any other. Measured on the pick-and-place scene: GCS takes 0.7 to 1.7 s
+        per request against 0.01 to 0.24 s for RRT-Connect, for paths up to 45 % shorter, so
+        RRT-Connect stays the default.
+
+        Args:
+            regions: a ``planning._regions.RegionSet`` (``load_or_build_regions``).
+            region_options: the ``RegionOptions`` they were grown with (defaults when None).
+            gcs_options: ``GcsOptions``; the planner's validation step and speed limits when
+                None.
+        """
+        from planning._gcs import GcsOptions, GcsPlanner
+        from planning._regions import RegionOptions
+
+        opts = self._options
+        gcs_options = gcs_options or GcsOptions(
+            validation_resolution=opts.validation_resolution, max_velocity=list(opts.max_velocity)
+        )
+        planner = GcsPlanner(self._scene, regions, gcs_options)
+        self._gcs = (planner, regions, region_options or RegionOptions())
+
+    def _gcs_path(self, q_start, q_goal, deadline: float):
+        """A GCS path when ``use_gcs`` was called and the scene is unchanged, else None."""
+        if self._gcs is None:
+            return None
+        from planning._regions import region_key
+
+        planner, regions, region_options = self._gcs
+        if region_key(self._scene, regions.seeds, region_options) != regions.key:
+            return None  # the scene changed since the regions were grown
+        result = planner.plan(q_start, q_goal, deadline)
+        return result.path if result.success else None
 
     @property
     def scene(self):
@@ -293,7 +331,9 @@ class MotionPlanner:
         path = np.vstack([q_start, q_goal])
         if not adapter.edge_free(q_start, q_goal):
             how = "rrt_connect"
-            path = None
+            path = self._gcs_path(q_start, q_goal, deadline)
+            if path is not None:
+                how = "gcs"
             while path is None and time.perf_counter() < deadline:
                 # Restart with fresh trees now and then: RRT run times are heavy-tailed.
                 path = self._rrt(

@@ -172,3 +172,19 @@ def test_regions_cli_builds_then_loads(tmp_path):
     second = subprocess.run(command, capture_output=True, text=True, env=env)
     assert second.returncode == 0 and "loaded from" in second.stdout
     assert len(list((tmp_path / "iris_regions").glob("*.npz"))) == 1
+
+
+def test_motion_planner_uses_gcs_while_the_scene_is_unchanged(scene, seeds, regions):
+    from planning import MotionPlanner
+
+    dut = MotionPlanner(scene)
+    dut.use_gcs(regions, CHEAP)
+    result = dut.plan_to_joints(seeds[2], q_start=seeds[1])  # over the obstacle
+    assert result.success and result.trajectory.info["planner"].startswith("gcs")
+    assert_fine_collision_free(scene, result.trajectory.waypoints)
+    scene.add_box("late_box", [0.05, 0.05, 0.05], RigidTransform([0.3, 0.5, 0.5]))
+    try:  # the regions no longer describe the scene: RRT-Connect
+        again = dut.plan_to_joints(seeds[2], q_start=seeds[1])
+        assert again.trajectory.info["planner"].startswith("rrt_connect")
+    finally:
+        scene.remove_object("late_box")
