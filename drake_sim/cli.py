@@ -46,6 +46,17 @@ def positive_float(text: str) -> float:
     return value
 
 
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0 (e.g. a random seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
+
+
 def add_robot_and_config_options(parser: argparse.ArgumentParser, default_config: Path) -> None:
     """Adds ``--robot FILE`` (default ``config/ddrive.yaml``) and ``--config FILE``."""
     parser.add_argument("--robot", type=Path, default=default_robot_file(), help="robot YAML")

@@ -27,16 +27,6 @@ HEADLESS_DURATION = 20.0  # s, the default run length without a viewer.
 PROGRESS_MIN_DURATION = 10.0  # s simulated: shorter headless runs show no progress bar.
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise cli.argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise cli.argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
-
-
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.flip", description=__doc__.split("\n")[0])
     cli.add_robot_and_config_options(parser, config_dir() / "flip.yaml")
@@ -49,7 +39,7 @@ def _parse_args(argv):
     parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
     parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     parser.add_argument("--report", type=Path, help="write the JSON report")
-    parser.add_argument("--seed", type=_non_negative_int, help="random seed (IMU noise)")
+    parser.add_argument("--seed", type=cli.non_negative_int, help="random seed (IMU noise)")
     parser.add_argument("--teleop", action="store_true", help="drive with Meshcat keys")
     parser.add_argument(
         "--set",

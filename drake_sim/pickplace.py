@@ -28,16 +28,6 @@ from planning.pick_place import PickPlaceTask, StepReport
 BUTTON = "Pick"
 
 
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise cli.argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise cli.argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
-
-
 def _parse_args(argv):
     parser = cli.ArgumentParser(
         prog="python -m drake_sim.pickplace", description=__doc__.split("\n")[0]
@@ -53,7 +43,7 @@ def _parse_args(argv):
     parser.add_argument("--no-wait", action="store_true", help="with a viewer: start at once")
     parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     parser.add_argument("--report", type=Path, help="write the JSON report")
-    parser.add_argument("--seed", type=_seed, help="planner random seed")
+    parser.add_argument("--seed", type=cli.non_negative_int, help="planner random seed")
     return parser.parse_args(argv)
 
 

@@ -38,6 +38,18 @@ from planning.interface import FINGER_OPEN
 from planning.scene_objects import SceneObject
 
 OBJECT = "object"
+STEPS = (
+    "check",
+    "move_above_object",
+    "open_gripper",
+    "approach",
+    "close_gripper",
+    "lift",
+    "attach",
+    "move_to_place",
+    "release",
+)
+"""The names of the reported steps, in order (``check`` is the feasibility check)."""
 
 
 @dc.dataclass
@@ -236,16 +248,16 @@ class PickPlaceTask:
             report.impossible, report.failed_step, report.reason = True, "check", reason
         else:
             steps = [
-                ("move_above_object", self._move_above_object),
-                ("open_gripper", lambda: self._gripper(FINGER_OPEN)),
-                ("approach", self._approach),
-                ("close_gripper", self._close),
-                ("lift", lambda: self._cartesian_up(self.options.lift_height)),
-                ("attach", self._attach),
-                ("move_to_place", self._move_to_place),
-                ("release", self._release),
+                self._move_above_object,
+                lambda: self._gripper(FINGER_OPEN),
+                self._approach,
+                self._close,
+                lambda: self._cartesian_up(self.options.lift_height),
+                self._attach,
+                self._move_to_place,
+                self._release,
             ]
-            for name, step in steps:
+            for name, step in zip(STEPS[1:], steps, strict=True):
                 ok, planning, message = self._run_step(step)
                 report.steps.append(StepReport(name, ok, planning, message, self._mpi.time))
                 if self._on_step is not None:

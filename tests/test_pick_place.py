@@ -11,17 +11,7 @@ from planning._task_geometry import boxes_overlap
 from planning.scene_io import BoxSpec
 from tests.pickplace_helpers import random_scene, run_task
 
-STEPS = [
-    "check",
-    "move_above_object",
-    "open_gripper",
-    "approach",
-    "close_gripper",
-    "lift",
-    "attach",
-    "move_to_place",
-    "release",
-]
+STEPS = list(mut.STEPS)
 
 
 @pytest.fixture(scope="module")
