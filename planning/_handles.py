@@ -60,10 +60,22 @@ class ActionHandle:
     calls ``_finish`` when the action is over.
     """
 
-    def __init__(self, interface, kind: str, start_time: float, end_time: float):
+    def __init__(
+        self,
+        interface,
+        kind: str,
+        start_time: float,
+        end_time: float,
+        *,
+        plan=None,
+        target: float | None = None,
+    ):
         self._interface = interface
         self.kind = kind  # "execute" or "gripper"
         self.start_time = start_time
+        self.plan = plan  # the Plan being executed ("execute")
+        self.target = target  # the requested finger position, m ("gripper")
+        self.cancel_requested = False
         self._planned_end = end_time
         self._status = RUNNING
         self._result: ExecutionResult | None = None
@@ -106,6 +118,7 @@ class ActionHandle:
         """Stops the action: the arm comes to rest along its plan, the fingers where they are.
         The result then has code PREEMPTED."""
         if self._result is None:
+            self.cancel_requested = True
             self._interface._cancel(self)
 
     def _finish(self, result: ExecutionResult, cancelled: bool = False) -> None:

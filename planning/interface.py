@@ -238,8 +238,7 @@ class MotionPlanningInterface:
         t = self.time
         command = ArmCommand(q_hold=plan.waypoints[-1].copy(), plan=plan, t0=t)
         self._commander.set_arm(self._context(self._commander), command)
-        self._arm = ActionHandle(self, "execute", t, t + plan.duration)
-        self._arm.plan = plan
+        self._arm = ActionHandle(self, "execute", t, t + plan.duration, plan=plan)
         return self._arm
 
     def execute(self, plan) -> ExecutionResult:
@@ -329,8 +328,7 @@ class MotionPlanningInterface:
                 target = max(target, self._kinematic_contact(follower_context, start))
         command = GripperCommand(start, target, t, self.options.finger_speed)
         self._commander.set_gripper(context, command)
-        self._gripper = ActionHandle(self, "gripper", t, command.end_time())
-        self._gripper.requested = position
+        self._gripper = ActionHandle(self, "gripper", t, command.end_time(), target=position)
         return self._gripper
 
     def move_gripper(self, position: float) -> ExecutionResult:
@@ -368,13 +366,13 @@ class MotionPlanningInterface:
         if moving and t < end + opts.finger_settle_timeout:
             return
         finger = float(np.mean(x[7:9]))
-        if handle.status == "running" and getattr(handle, "cancelled", False):
+        if handle.cancel_requested:
             result = ExecutionResult(
                 False, ErrorCode.PREEMPTED, "cancelled", self.state.q, finger, handle.start_time, t
             )
             handle._finish(result, cancelled=True)
             return
-        requested = handle.requested
+        requested = handle.target
         closing = command.target < command.start or requested < command.start
         grasped = closing and finger > requested + opts.finger_tolerance
         if grasped and self._follower is not None:
@@ -402,4 +400,3 @@ class MotionPlanningInterface:
             context = self._context(self._commander)
             finger = float(self._commander.gripper(context).sample(t))
             self._commander.set_gripper(context, GripperCommand(finger, finger, t))
-            handle.cancelled = True

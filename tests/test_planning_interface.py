@@ -160,3 +160,15 @@ def test_monitor_sees_every_poll(dut):
     dut.advance(0.1)
     np.testing.assert_allclose(np.diff(times), dut.options.poll_period)
     assert len(times) == 10
+
+
+def test_gripper_move_can_be_cancelled(dut):
+    handle = dut.move_gripper_async(0.0)
+    dut.advance(0.2)
+    assert 0.0 < handle.progress < 1.0
+    handle.cancel()
+    result = handle.result()
+    assert result.code is ErrorCode.PREEMPTED and handle.status == "cancelled"
+    assert 0.02 < result.finger_position < FINGER_OPEN  # stopped part way
+    dut.advance(0.3)
+    assert dut.read_state()[7] == pytest.approx(result.finger_position, abs=1e-6)
