@@ -215,9 +215,9 @@ class PickPlaceTask:
     def _place_pose(self, X_WO) -> RigidTransform:
         """X_WO at the place target: same orientation, resting ``place_clearance`` above the
         table (or at the target's height when it says so)."""
-        size = self._scene.world_objects.get(OBJECT) or self._scene.attached_objects[OBJECT]
+        obj = self._scene.world_objects.get(OBJECT) or self._scene.attached_objects[OBJECT]
         p = np.asarray(self._scene.place_position, dtype=float).copy()
-        p[2] = max(p[2], self._table_top() + 0.5 * size.size[2]) + self.options.place_clearance
+        p[2] = max(p[2], self._table_top() + 0.5 * obj.size[2]) + self.options.place_clearance
         return RigidTransform(X_WO.rotation(), p)
 
     def _table_top(self) -> float:
@@ -287,6 +287,8 @@ class PickPlaceTask:
             message = step() or "done"
         except (PlanningError, _StepError) as e:
             return False, self._planning, str(e)
+        except (RuntimeError, ValueError) as e:  # e.g. a timing that cannot be computed
+            return False, self._planning, f"{type(e).__name__}: {e}"
         return True, self._planning, message
 
     def _execute(self, result) -> str:
