@@ -18,9 +18,9 @@ class MotionPlannerOptions:
 
     timeout: float = 5.0  # s of wall time per request
     seed: int = 0  # seed of np.random.default_rng, fresh for each request
-    rrt_step: float = 0.5  # rad, largest RRT-Connect extension (joint-space L2)
+    rrt_step: float = 1.0  # rad, largest RRT-Connect extension (joint-space L2)
     goal_bias: float = 0.05  # probability of sampling the other tree's root
-    rrt_batch: int = 8  # RRT-Connect extensions per collision query (1: one at a time)
+    rrt_batch: int = 16  # RRT-Connect extensions per collision query (1: one at a time)
     rrt_restart_interval: float = 10.0  # s, RRT-Connect restarts with new trees after this
     shortcut_iterations: int = 20  # random shortcut attempts after the greedy pass
     shortcut_time_fraction: float = 0.2  # share of the remaining time shortcutting may use
