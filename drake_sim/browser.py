@@ -9,7 +9,7 @@ animated GIF of a replay cheap.
 Example::
 
     with HeadlessBrowser(size=(640, 400)) as browser:
-        browser.open("file:///tmp/replay.html")
+        browser.open(file_url(Path("replay.html")))
         browser.wait_for("typeof viewer !== 'undefined'")
         Path("shot.png").write_bytes(browser.screenshot())
 """
@@ -99,7 +99,7 @@ class HeadlessBrowser:
         child_r, self._to_browser = os.pipe()
         self._from_browser, child_w = os.pipe()
         remap = 'exec "$@" 3<&0 4>&1 </dev/null >/dev/null'
-        args = ["/bin/sh", "-c", remap, "sh", executable, *_FLAGS]
+        args = ["sh", "-c", remap, "sh", executable, *_FLAGS]  # sh from PATH
         args += [f"--user-data-dir={self._profile.name}", f"--window-size={size[0]},{size[1]}"]
         try:
             self._process = subprocess.Popen(
