@@ -345,18 +345,23 @@ class MotionPlanner:
                 )
             if path is None:
                 raise self._failure(deadline, "RRT-Connect found no path")
-            budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
-            path = shortcut(
-                adapter,
-                path,
-                iterations=opts.shortcut_iterations,
-                deadline=time.perf_counter() + budget,
-                rng=rng,
-            )
+            path = self._shortcut(adapter, path, deadline, rng)
         path, how = self._validated(fine, path, how, deadline, rng)
         if opts.refine_with_kto and how != "straight":
             path, how = self._refined(path, how)
         return path, how
+
+    def _shortcut(self, adapter, path: np.ndarray, deadline: float, rng) -> np.ndarray:
+        """Shortcuts a path with ``shortcut_time_fraction`` of the time left."""
+        opts = self._options
+        budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
+        return shortcut(
+            adapter,
+            path,
+            iterations=opts.shortcut_iterations,
+            deadline=time.perf_counter() + budget,
+            rng=rng,
+        )
 
     def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
         """RRT-Connect, batched (``planning._rrt_batch``) when ``rrt_batch`` > 1."""
@@ -407,14 +412,7 @@ class MotionPlanner:
             whole = self._rrt(fine, path[0], path[-1], deadline=deadline, rng=rng, step=step)
             if whole is None:
                 break
-            budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
-            path = shortcut(
-                fine,
-                whole,
-                iterations=opts.shortcut_iterations,
-                deadline=time.perf_counter() + budget,
-                rng=rng,
-            )
+            path = self._shortcut(fine, whole, deadline, rng)
             how += "+replanned"
         raise self._failure(deadline, "no path passed the fine collision check")
 
