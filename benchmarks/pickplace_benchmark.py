@@ -28,7 +28,7 @@ def _progress(items, label):
         from tqdm import tqdm
     except ImportError:
         return items
-    return tqdm(items, desc=label, leave=False, file=sys.stderr)
+    return tqdm(items, desc=label, leave=False, file=sys.stderr, disable=None)
 
 
 def run_one(config, mode):

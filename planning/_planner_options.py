@@ -48,9 +48,10 @@ class MotionPlannerOptions:
     # ask Drake's checker only where the spheres cannot decide.
     sphere_checks: bool = True
     sphere_slack: float = 0.015  # m, how far spheres may bulge beyond the link meshes
-    # s into a search before Drake is asked about what the spheres cannot decide (until then
-    # that counts as colliding); validation always asks Drake.
-    drake_fallback_delay: float = 0.2
+    # Sphere-checked configurations of a search before Drake is asked about what the spheres
+    # cannot decide (until then that counts as colliding); validation always asks Drake. A
+    # count, not a time, so that a seed gives the same path on any machine.
+    drake_fallback_after: int = 50_000
     # rad between collision samples of the search's edges with sphere checks (the returned path
     # is validated at validation_resolution in any case).
     search_resolution: float = 0.1
@@ -81,8 +82,8 @@ def check_options(options: MotionPlannerOptions) -> None:
         bad.append("velocity_scaling/acceleration_scaling (must be in (0, 1])")
     if len(options.max_velocity) != 7 or len(options.max_acceleration) != 7:
         bad.append("max_velocity/max_acceleration (7 values each)")
-    if options.rrt_batch < 1 or options.drake_fallback_delay < 0.0:
-        bad.append("rrt_batch (at least 1)/drake_fallback_delay (not negative)")
+    if options.rrt_batch < 1 or options.drake_fallback_after < 0:
+        bad.append("rrt_batch (at least 1)/drake_fallback_after (not negative)")
     if options.validation_resolution > 0.01:
         bad.append("validation_resolution (at most 0.01 rad)")
     if bad:

@@ -2,12 +2,13 @@
 
 The kinematic tree (each joint's parent and child body, its fixed poses X_PF of the joint's
 frame F on the parent P and X_CM of its frame M on the child C, and its axis) is read from the
-plant once; then ``poses(q)`` evaluates X_WB of the wanted bodies for N configurations with
-numpy: X_WC = X_WP X_PF X_FM(q) X_MC, where X_FM is a rotation about the axis by q (revolute),
+plant once; then ``poses(q)`` evaluates X_WB of the wanted bodies for N configurations in
+compiled loops (``planning._sphere_kernel``, which also reads the tree as flat ``arrays``):
+X_WC = X_WP X_PF X_FM(q) X_MC, where X_FM is a rotation about the axis by q (revolute),
 a translation along it (prismatic) or fixed (weld). Other joint types are not supported.
 X_PC(q) is affine in (1, sin q, cos q) for a revolute joint (Rodrigues: R = I + K^2 + sin(q) K
 - cos(q) K^2, K the axis' cross-product matrix) and in (1, q) for a prismatic one, so each
-body costs a weighted sum of constant 4x4 matrices and one batched 4x4 product.
+body costs a weighted sum of constant 4x4 matrices and one 4x4 product.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.multibody.tree import JointIndex
+
+from planning._sphere_kernel import transforms
 
 
 @dataclass
@@ -58,7 +61,7 @@ class BatchedKinematics:
             return slots[body]
 
         self._out = [visit(int(b)) for b in bodies]
-        self._terms = None  # stacked terms of the moving joints, made on first use
+        self._arrays = None  # the tree as flat arrays, made on first use
         self.num_positions = plant.num_positions()
 
     def poses(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -72,30 +75,32 @@ class BatchedKinematics:
 
     def transforms(self, q: np.ndarray) -> np.ndarray:
         """Returns X_WB of the wanted bodies as homogeneous matrices, (K, N, 4, 4)."""
-        q = np.atleast_2d(q)
-        if self._terms is None:
-            moving = [s for s in self._steps if s.kind != "weld"]
-            terms = [s.terms + [np.zeros((4, 4))] * (3 - len(s.terms)) for s in moving]
-            self._terms = np.array(terms).reshape(len(moving), 3, 16)
-            self._q_index = np.array([s.q_index for s in moving], dtype=int)
-            self._revolute = np.array([s.kind == "revolute" for s in moving])
-            self._moving = {id(s): j for j, s in enumerate(moving)}
-        x = q[:, self._q_index].T  # (J, N)
-        coef = np.empty((len(x), len(q), 3))
-        coef[:, :, 0] = 1.0
-        coef[:, :, 1] = np.where(self._revolute[:, None], np.sin(x), x)
-        coef[:, :, 2] = np.where(self._revolute[:, None], np.cos(x), 0.0)
-        # Every moving joint's X_PC at once: (J, N, 3) @ (J, 3, 16).
-        X_PC = np.matmul(coef, self._terms).reshape(len(x), len(q), 4, 4)
-        T = np.empty((len(self._steps), len(q), 4, 4))
-        for s in self._steps:
-            j = self._moving.get(id(s))
-            X = s.terms[0] if j is None else X_PC[j]
-            if s.parent < 0:
-                T[s.child] = X
-            else:
-                np.matmul(T[s.parent], X, out=T[s.child])
-        return T[self._out]
+        q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
+        X = transforms(q, *self.arrays())  # (N, J, 3, 4)
+        T = np.zeros((len(self._out), len(q), 4, 4))
+        T[:, :, :3, :] = X[:, self._out].transpose(1, 0, 2, 3)
+        T[:, :, 3, 3] = 1.0
+        return T
+
+    @property
+    def out(self) -> np.ndarray:
+        """The step (row of ``arrays``' tables) of each wanted body, in order."""
+        return np.asarray(self._out, dtype=np.int64)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The tree as ``planning._sphere_kernel`` reads it: (parent, kind, q_index, terms)."""
+        if self._arrays is None:
+            kinds = {"weld": 0, "revolute": 1, "prismatic": 2}
+            terms = np.zeros((len(self._steps), 3, 3, 4))
+            for k, s in enumerate(self._steps):
+                terms[k, : len(s.terms)] = np.array(s.terms)[:, :3, :]
+            self._arrays = (
+                np.array([s.parent for s in self._steps], dtype=np.int64),
+                np.array([kinds[s.kind] for s in self._steps], dtype=np.int64),
+                np.array([max(s.q_index, 0) for s in self._steps], dtype=np.int64),
+                terms,
+            )
+        return self._arrays
 
 
 def _make_step(joint, slot: int, parent: int) -> _Step:

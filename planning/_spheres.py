@@ -1,10 +1,10 @@
-"""Fast collision checks of many Panda configurations with sphere models, in numpy.
+"""Fast collision checks of many Panda configurations with sphere models.
 
 The robot's collision geometry (arm links, hand, fingers at the scene's finger positions, and
 held objects) is covered by spheres (``_sphere_robot``); world objects stay exact boxes,
-cylinders and spheres. ``SphereCollisionModel.classify`` runs batched forward kinematics
-(``_sphere_fk``) for N configurations, then exact point-to-primitive distances (and sphere pair
-distances for self-collision) and sorts each configuration into:
+cylinders and spheres. ``SphereCollisionModel.classify`` runs forward kinematics for each
+configuration, then exact point-to-primitive distances (and sphere pair distances for
+self-collision), in compiled loops (``_sphere_kernel``), and sorts each configuration into:
 
 - ``FREE``: no outer sphere is within its pair's padding of anything. The outer spheres
   contain the robot's geometry, so Drake's checker finds it collision-free too.
@@ -19,9 +19,9 @@ they follow the model. Paddings below zero (a held object may touch the world) o
 inner test; the outer test uses at least zero.
 
 Costs: each body's spheres are cut into groups of up to ``_GROUP`` neighbours with a bounding
-sphere; a group pass finds the (configuration, group) and (configuration, group pair) cases
-with anything near, and only those reach the per-sphere pass. The batched pass runs in single
-precision with a margin of ``_MARGIN`` on the safe side. World objects are re-read whenever the
+sphere; only groups (and group pairs) with anything near reach the per-sphere pass, and a
+configuration stops at its first certain collision. Every comparison has a margin of
+``_MARGIN`` on the safe side. World objects are re-read whenever the
 scene's objects change, the robot's spheres whenever held objects or filters change, and the
 finger positions on every change.
 """
@@ -31,15 +31,15 @@ from __future__ import annotations
 import numpy as np
 from pydrake.multibody.tree import BodyIndex
 
+from planning import _sphere_kernel as _kernel
 from planning._sphere_cover import SphereSet
 from planning._sphere_fk import BatchedKinematics
+from planning._sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
 from planning._sphere_robot import cover_shape, robot_spheres
 from planning.panda_model import ATTACHMENT_BODY
 
-FREE, COLLIDING, UNKNOWN = 0, 1, 2
-_MARGIN = 1e-5  # m, added on the safe side of every comparison (covers float32 rounding)
-_FLOAT = np.float32  # the batched pass runs in single precision: half the memory traffic
-_CHUNK = 256  # configurations per numpy pass
+__all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
+_MARGIN = 1e-5  # m, added on the safe side of every comparison (covers rounding)
 _GROUP = 4  # spheres per culling group
 
 
@@ -78,6 +78,7 @@ class SphereCollisionModel:
         except NotImplementedError:
             self.supported = False
         self.sync()
+        self.classify(np.zeros((1, 7)))  # compiles or loads the kernel now, not mid-request
 
     # ---------------------------------------------------------------------------- scene ----
     def sync(self) -> None:
@@ -106,7 +107,13 @@ class SphereCollisionModel:
                 self._filtered = filtered
                 self._build_robot(held)
                 self._held_signature = signature[1]
-            self._objects = _Primitives(world.values())
+            self._data = KernelData(
+                *self._kin.arrays(),
+                template=np.ascontiguousarray(self._template, dtype=float),
+                arm=np.asarray(self._arm, dtype=np.int64),
+                **self._robot_arrays,
+                objects=_primitives(world.values()),
+            )
 
     def _build_robot(self, held) -> None:
         sets = dict(self._robot)
@@ -118,70 +125,99 @@ class SphereCollisionModel:
         owner = np.concatenate([np.full(len(sets[b].radius), b) for b in present])
         self._slot = np.array([slot[b] for b in owner], dtype=int)
         p_BS = np.vstack([sets[b].p_BS for b in present])
-        self._p_BS = np.vstack([p_BS.T, np.ones(len(owner))])  # (4, S), homogeneous
         radius = np.concatenate([sets[b].radius for b in present])
         inner = np.concatenate([sets[b].inner for b in present])
         self._radius = radius
-        # Groups of up to _GROUP neighbouring spheres of one body, each with a bounding sphere:
-        # configurations are culled per group before spheres are looked at.
+        # Groups of up to _GROUP neighbouring spheres of one body, each with a bounding sphere,
+        # and a bounding sphere of each body's groups: configurations are culled per body, then
+        # per group, before spheres are looked at.
         groups = [(b, m) for b in present for m in _groups(np.flatnonzero(owner == b), p_BS)]
         bounds = [_bound(p_BS[m], radius[m]) for _, m in groups]
-        self._group_slot = np.array([slot[b] for b, _ in groups], dtype=int)
-        self._group_centre = np.vstack([np.array([c for c, _ in bounds]).T, np.ones(len(groups))])
+        group_centre = np.array([c for c, _ in bounds]).reshape(-1, 3)
         group_radius = np.array([r for _, r in bounds])
-        members = np.zeros((len(groups), _GROUP), dtype=int)
+        group_body = np.array([present.index(b) for b, _ in groups], dtype=np.int64)
+        body_bounds = [
+            _bound(group_centre[group_body == k], group_radius[group_body == k])
+            for k in range(len(present))
+        ]
+        step = self._kin.out  # kinematic step of each of self._bodies
+        members = np.zeros((len(groups), _GROUP), dtype=np.int64)
         for g, (_, m) in enumerate(groups):
             members[g, : len(m)] = m
         used = np.arange(_GROUP)[None, :] < np.array([len(m) for _, m in groups])[:, None]
         # Environment: groups of bodies not filtered against the world (not the welded base).
         env = [g for g, (b, _) in enumerate(groups) if self._filtered[b, self._world] == 0]
-        pad = np.array([self._padding[groups[g][0], self._world] for g in env]).reshape(-1, 1)
-        self._env = np.array(env, dtype=int)
-        self._env_members = members[env]
-        self._env_reach2 = (group_radius[env] + np.maximum(pad[:, 0], 0.0) + _MARGIN)[:, None] ** 2
+        world_pad = np.array([self._padding[b, self._world] for b in present])
+        pad = world_pad[group_body[env]][:, None]
         r_out = radius[members[env]] + np.maximum(pad, 0.0) + _MARGIN
-        self._env_out = np.where(used[env], _squared(r_out), -1.0)
         r_in = inner[members[env]]
-        self._env_in = np.where(used[env] & (r_in > 0), _squared(r_in + pad - _MARGIN), -1.0)
+        body_radius = np.array([r for _, r in body_bounds])
+        arrays = dict(
+            sphere_step=step[self._slot],
+            p_BS=p_BS,
+            body_step=step[[slot[b] for b in present]],
+            p_BL=np.array([c for c, _ in body_bounds]).reshape(-1, 3),
+            body_reach=body_radius + np.maximum(world_pad, 0.0) + _MARGIN,
+            group_step=step[[slot[b] for b, _ in groups]],
+            p_BG=group_centre,
+            env_group=np.array(env, dtype=np.int64),
+            env_body=group_body[env],
+            env_reach2=(group_radius[env] + np.maximum(pad[:, 0], 0.0) + _MARGIN) ** 2,
+            env_member=members[env],
+            env_out=np.where(used[env], _squared(r_out), -1.0),
+            env_in=np.where(used[env] & (r_in > 0), _squared(r_in + pad - _MARGIN), -1.0),
+        )
         # Self-collision: group pairs of the body pairs the checker checks, sphere pairs padded
-        # to _GROUP**2 per group pair.
+        # to _GROUP**2 per group pair, in runs per body pair.
         checked_bodies = self._checked_body_pairs(present)
-        checked = [
-            (g, h)
-            for g, (a, _) in enumerate(groups)
-            for h, (b, _) in enumerate(groups)
-            if (a, b) in checked_bodies
-        ]
+        checked = sorted(
+            (
+                (present.index(a), present.index(b), g, h)
+                for g, (a, _) in enumerate(groups)
+                for h, (b, _) in enumerate(groups)
+                if (a, b) in checked_bodies
+            ),
+        )
+        body_pairs = list(dict.fromkeys((i, j) for i, j, _, _ in checked))
+        run = np.searchsorted(
+            [i * len(present) + j for i, j, _, _ in checked],
+            [i * len(present) + j for i, j in body_pairs] + [np.inf],
+        )
         n_pairs = _GROUP * _GROUP
-        self._group_pairs = np.array(checked, dtype=int).reshape(-1, 2)
-        self._pair_a = np.zeros((len(checked), n_pairs), dtype=int)
-        self._pair_b = np.zeros((len(checked), n_pairs), dtype=int)
-        self._pair_out = np.full((len(checked), n_pairs), -1.0)
-        self._pair_in = np.full((len(checked), n_pairs), -1.0)
+        pair_a = np.zeros((len(checked), n_pairs), dtype=np.int64)
+        pair_b = np.zeros((len(checked), n_pairs), dtype=np.int64)
+        pair_out = np.full((len(checked), n_pairs), -1.0)
+        pair_in = np.full((len(checked), n_pairs), -1.0)
         reach = np.zeros(len(checked))
-        for k, (g, h) in enumerate(checked):
+        for k, (_, _, g, h) in enumerate(checked):
             (a, ma), (b, mb) = groups[g], groups[h]
             pad = self._padding[a, b]
             reach[k] = group_radius[g] + group_radius[h] + max(pad, 0.0) + _MARGIN
             ia, ib = np.repeat(ma, len(mb)), np.tile(mb, len(ma))
             count = len(ia)
-            self._pair_a[k, :count], self._pair_b[k, :count] = ia, ib
-            self._pair_out[k, :count] = _squared(radius[ia] + radius[ib] + max(pad, 0) + _MARGIN)
+            pair_a[k, :count], pair_b[k, :count] = ia, ib
+            pair_out[k, :count] = _squared(radius[ia] + radius[ib] + max(pad, 0) + _MARGIN)
             ok = (inner[ia] > 0) & (inner[ib] > 0)
-            r_in = np.where(ok, inner[ia] + inner[ib] + pad - _MARGIN, -1.0)
-            self._pair_in[k, :count] = _squared(r_in)
-        self._group_reach2 = (reach**2)[:, None]
-        for name in (
-            "_p_BS",
-            "_group_centre",
-            "_env_reach2",
-            "_env_out",
-            "_env_in",
-            "_pair_out",
-            "_pair_in",
-            "_group_reach2",
-        ):
-            setattr(self, name, getattr(self, name).astype(_FLOAT))
+            pair_in[k, :count] = _squared(np.where(ok, inner[ia] + inner[ib] + pad - _MARGIN, -1.0))
+        body_pad = np.array(
+            [max(self._padding[present[i], present[j]], 0.0) for i, j in body_pairs]
+        )
+        body_pairs = np.array(body_pairs, dtype=np.int64).reshape(-1, 2)
+        arrays.update(
+            body_pair=body_pairs,
+            body_pair_reach2=(
+                body_radius[body_pairs[:, 0]] + body_radius[body_pairs[:, 1]] + body_pad + _MARGIN
+            )
+            ** 2,
+            body_pair_start=np.asarray(run, dtype=np.int64),
+            pair_group=np.array([(g, h) for _, _, g, h in checked], dtype=np.int64).reshape(-1, 2),
+            pair_reach2=reach**2,
+            pair_a=pair_a,
+            pair_b=pair_b,
+            pair_out=pair_out,
+            pair_in=pair_in,
+        )
+        self._robot_arrays = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
 
     def _checked_body_pairs(self, present: list[int]) -> set[tuple[int, int]]:
         """Body pairs (a before b in ``present``) that Drake's checker checks: filtered
@@ -230,8 +266,11 @@ class SphereCollisionModel:
         """Returns the spheres' centres p_WS (N, S, 3) for configurations qs (N, 7) and their
         outer radii (S,), m."""
         self.sync()
-        T = self._transforms(np.atleast_2d(qs))
-        return _apply(T, self._slot, self._p_BS).transpose(2, 1, 0), self._radius.copy()
+        T = self._transforms(np.atleast_2d(qs))  # (K, N, 4, 4)
+        X = T[self._slot]  # (S, N, 4, 4)
+        p = self._robot_arrays["p_BS"]
+        p_WS = np.einsum("snij,sj->nsi", X[:, :, :3, :3], p) + X[:, :, :3, 3].transpose(1, 0, 2)
+        return p_WS, self._radius.copy()
 
     def _transforms(self, qs: np.ndarray) -> np.ndarray:
         full = np.tile(self._template, (len(qs), 1))
@@ -240,52 +279,26 @@ class SphereCollisionModel:
 
     def classify(self, qs) -> np.ndarray:
         """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, 7), rad."""
-        qs = np.atleast_2d(np.asarray(qs, dtype=float))
-        out = np.full(len(qs), UNKNOWN, dtype=np.int8)
-        if not self.active:
-            return out
-        for start in range(0, len(qs), _CHUNK):
-            out[start : start + _CHUNK] = self._classify(qs[start : start + _CHUNK])
-        return out
+        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        state = np.full(len(qs), UNKNOWN, dtype=np.int8)
+        if self.active:  # each configuration as a segment from itself to itself: one sample
+            first, _, unknown, _ = _kernel.prefixes(qs, qs, 1.0, False, self._data)
+            state[:] = np.where(first == 0, COLLIDING, FREE)
+            state[unknown] = UNKNOWN
+        return state
 
-    def _classify(self, qs: np.ndarray) -> np.ndarray:
-        n = len(qs)
-        T = self._transforms(qs).astype(_FLOAT)
-        centres = _apply(T, self._slot, self._p_BS)  # (3, S, N)
-        groups = _apply(T, self._group_slot, self._group_centre)  # (3, G, N)
-        outer = np.zeros(n, dtype=bool)
-        inner = np.zeros(n, dtype=bool)
-        if self._objects.count and len(self._env):
-            d2 = self._objects.min_distance2(groups[:, self._env].reshape(3, -1))
-            g, r = np.nonzero(d2.reshape(len(self._env), n) < self._env_reach2)
-            if len(g):
-                points = centres[:, self._env_members[g], r[:, None]]  # (3, M, _GROUP)
-                d2 = self._objects.min_distance2(points.reshape(3, -1))
-                d2 = d2.reshape(len(g), _GROUP)
-                outer[r[(d2 < self._env_out[g]).any(axis=1)]] = True
-                inner[r[(d2 < self._env_in[g]).any(axis=1)]] = True
-        if len(self._group_pairs):
-            diff = groups[:, self._group_pairs[:, 0]] - groups[:, self._group_pairs[:, 1]]
-            k, r = np.nonzero((diff * diff).sum(axis=0) < self._group_reach2)  # near group pairs
-            if len(k):
-                rows = r[:, None]
-                diff = centres[:, self._pair_a[k], rows] - centres[:, self._pair_b[k], rows]
-                d2 = (diff * diff).sum(axis=0)  # (M, _GROUP**2)
-                outer[r[(d2 < self._pair_out[k]).any(axis=1)]] = True
-                inner[r[(d2 < self._pair_in[k]).any(axis=1)]] = True
-        return np.where(inner, COLLIDING, np.where(outer, UNKNOWN, FREE)).astype(np.int8)
-
-
-def _apply(T: np.ndarray, slot: np.ndarray, p_B: np.ndarray) -> np.ndarray:
-    """Points p_W (3, P, N) of points p_B (4, P, homogeneous) fixed on bodies ``slot`` (P,),
-    for body poses T (K, N, 4, 4). (Elementwise on purpose: a matrix product with an inner
-    size of 4 is slow, and multi-threaded BLAS is slower still on a loaded machine.)"""
-    T3 = np.ascontiguousarray(T[:, :, :3, :].transpose(2, 3, 0, 1))  # (3, 4, K, N)
-    G = np.take(T3, slot, axis=2)  # (3, 4, P, N)
-    out = G[:, 3].copy()
-    for i in range(3):
-        out += G[:, i] * p_B[i][:, None]
-    return out
+    def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
+        """Classifies samples of segments from their starts up to their first blocking one;
+        see ``_sphere_kernel.prefixes``. Without a sphere model every sample is UNKNOWN."""
+        q_a = np.ascontiguousarray(np.atleast_2d(q_a), dtype=float)
+        q_b = np.ascontiguousarray(np.atleast_2d(q_b), dtype=float)
+        if self.active:
+            return _kernel.prefixes(q_a, q_b, float(step), stop_at_unknown, self._data)
+        n = np.maximum(1, np.ceil(np.linalg.norm(q_b - q_a, axis=1) / step).astype(np.int64))
+        if stop_at_unknown:
+            return np.zeros(len(n), dtype=np.int64), n, np.zeros(0, int), np.zeros(0, int)
+        edge = np.repeat(np.arange(len(n)), n)
+        return n.copy(), n, edge, np.arange(len(edge)) - np.repeat(np.cumsum(n) - n, n)
 
 
 def _squared(reach: np.ndarray) -> np.ndarray:
@@ -310,67 +323,32 @@ def _groups(members: np.ndarray, p: np.ndarray, size: int = _GROUP) -> list[np.n
     return [ordered[k : k + size] for k in range(0, len(ordered), size)]
 
 
-class _Primitives:
-    """World boxes, cylinders and spheres as arrays; ``min_distance2`` gives the squared
-    Euclidean distance from points to the nearest object (0 inside), m^2.
-
-    Points are taken into every box and cylinder frame O at once with one matrix product:
-    p_OQ = R_WO^T p_WQ - R_WO^T p_WO, the rotations stacked side by side.
-    """
-
-    def __init__(self, objects):
-        objects = list(objects)
-        boxes = [o for o in objects if o.shape == "box"]
-        cylinders = [o for o in objects if o.shape == "cylinder"]
-        spheres = [o for o in objects if o.shape == "sphere"]
-        self.count = len(objects)
-        framed = boxes + cylinders
-        R = [o.X_PO.rotation().matrix() for o in framed]
-        self._W = np.hstack(R) if R else np.zeros((3, 0))  # (3, 3F): [R_WO1 R_WO2 ...]
-        offsets = [r.T @ o.X_PO.translation() for r, o in zip(R, framed, strict=True)]
-        self._offset = np.concatenate(offsets) if offsets else np.zeros(0)
-        self._nb = len(boxes)
-        self._box_h = np.array([o.size for o in boxes]).reshape(-1, 3) / 2
-        self._cyl_r = np.array([o.size[0] for o in cylinders])
-        self._cyl_h = np.array([o.size[1] / 2 for o in cylinders])
-        self._sph_p = np.array([o.X_PO.translation() for o in spheres]).reshape(-1, 3)
-        self._sph_r = np.array([o.size[0] for o in spheres])
-        for name in ("_W", "_offset", "_box_h", "_cyl_r", "_cyl_h", "_sph_p", "_sph_r"):
-            setattr(self, name, getattr(self, name).astype(_FLOAT))
-
-    def min_distance2(self, points: np.ndarray) -> np.ndarray:
-        """Squared distances (M,) from points (3, M) to the nearest object, m^2 (in place
-        wherever possible: the cost is memory traffic)."""
-        best = None
-        if self._W.shape[1]:
-            local = self._W.T @ points
-            local -= self._offset[:, None]
-            local = local.reshape(-1, 3, points.shape[1])
-            if self._nb:
-                box = local[: self._nb]
-                np.abs(box, out=box)
-                box -= self._box_h[:, :, None]
-                np.maximum(box, 0.0, out=box)
-                np.square(box, out=box)
-                best = box.sum(axis=1).min(axis=0)
-            cyl = local[self._nb :]
-            if len(cyl):
-                radial = np.square(cyl[:, 0])
-                radial += np.square(cyl[:, 1])
-                np.sqrt(radial, out=radial)
-                radial -= self._cyl_r[:, None]
-                np.maximum(radial, 0.0, out=radial)
-                np.square(radial, out=radial)
-                axial = np.abs(cyl[:, 2])
-                axial -= self._cyl_h[:, None]
-                np.maximum(axial, 0.0, out=axial)
-                np.square(axial, out=axial)
-                radial += axial
-                d = radial.min(axis=0)
-                best = d if best is None else np.minimum(best, d, out=best)
-        if len(self._sph_p):
-            diff = points[None, :, :] - self._sph_p[:, :, None]
-            d = np.maximum(np.sqrt((diff * diff).sum(axis=1)) - self._sph_r[:, None], 0.0)
-            d = np.square(d).min(axis=0)
-            best = d if best is None else np.minimum(best, d, out=best)
-        return best
+def _primitives(objects) -> np.ndarray:
+    """World boxes, cylinders and spheres as the kernel's object rows (``KernelData``): object
+    O as its kind, W = R_WO^T and offset = R_WO^T p_WO (so p_OQ = W p_WQ - offset), its sizes
+    (box: half sizes; cylinder: radius, half length; sphere: radius) and the corners of an
+    axis-aligned box around it, m."""
+    objects = list(objects)
+    kinds = {"box": 0, "cylinder": 1, "sphere": 2}
+    W = np.array([o.X_PO.rotation().matrix().T for o in objects]).reshape(-1, 3, 3)
+    p = np.array([o.X_PO.translation() for o in objects]).reshape(-1, 3)
+    size = np.zeros((len(objects), 3))
+    half = np.zeros((len(objects), 3))  # half extents along the object's own axes
+    for k, o in enumerate(objects):
+        if o.shape == "box":
+            size[k] = half[k] = np.asarray(o.size) / 2
+        elif o.shape == "cylinder":
+            size[k, :2] = o.size[0], o.size[1] / 2
+            half[k] = o.size[0], o.size[0], o.size[1] / 2
+        else:
+            size[k, 0] = o.size[0]
+            half[k] = o.size[0]
+    extent = np.einsum("kji,kj->ki", np.abs(W), half)  # |R_WO| half
+    rows = np.zeros((len(objects), _kernel.OBJ_COLUMNS))
+    rows[:, _kernel.OBJ_KIND] = [kinds[o.shape] for o in objects]
+    rows[:, _kernel.OBJ_W : _kernel.OBJ_W + 9] = W.reshape(-1, 9)
+    rows[:, _kernel.OBJ_OFFSET : _kernel.OBJ_OFFSET + 3] = np.einsum("kij,kj->ki", W, p)
+    rows[:, _kernel.OBJ_SIZE : _kernel.OBJ_SIZE + 3] = size
+    rows[:, _kernel.OBJ_LOWER : _kernel.OBJ_LOWER + 3] = p - extent
+    rows[:, _kernel.OBJ_UPPER : _kernel.OBJ_UPPER + 3] = p + extent
+    return rows

@@ -228,7 +228,7 @@ def _progress(total: int):
         def write(self, line: str) -> None:  # tqdm.write keeps the bar below the lines
             tqdm.write(line, file=sys.stdout)
 
-    return _Bar(total=total, file=sys.stderr, unit="problem", dynamic_ncols=True)
+    return _Bar(total=total, file=sys.stderr, unit="problem", dynamic_ncols=True, disable=None)
 
 
 def plot_times(rows: list[dict], filename: Path) -> None:

@@ -308,7 +308,8 @@ class MotionPlanner:
     # --------------------------------------------------------------------------- search ----
     def _adapter(self, resolution: float | None = None, *, search: bool = False):
         """Collision queries: sphere models first when enabled (``planning._sphere_checker``).
-        A search adapter leaves Drake out for ``drake_fallback_delay`` s (what the spheres
+        A search adapter leaves Drake out for ``drake_fallback_after`` sphere-checked
+        configurations (what the spheres
         cannot decide counts as colliding), then asks it too; a validating one always does,
         so validation accepts exactly what Drake's checker accepts."""
         opts = self._options
@@ -316,7 +317,7 @@ class MotionPlanner:
             return CheckerAdapter(self._scene, resolution)
         after = None
         if search:
-            after = time.perf_counter() + opts.drake_fallback_delay
+            after = opts.drake_fallback_after
             resolution = opts.search_resolution
         return SphereCheckerAdapter(
             self._scene, resolution, slack=opts.sphere_slack, fallback_after=after
