@@ -8,13 +8,8 @@ from the installed ``example-robot-data`` package (``panda_assets``), is built f
 from planning.config import IkOptions, PandaPlanningConfig, load_panda_config
 from planning.errors import ErrorCode, PlanningError
 from planning.ik import IkResult
-from planning.motion_planner import (
-    MotionPlanner,
-    MotionPlannerOptions,
-    PlanResult,
-    load_planner_options,
-)
-from planning.plan import Plan, describe_scene
+from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
+from planning.plan import Plan, PlanResult, describe_scene
 from planning.planning_scene import PlanningScene
 from planning.robot_state import RobotState, RobotStateReader
 from planning.scene_io import load_moveit_scene, load_scene_yaml, save_scene_yaml

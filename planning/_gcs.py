@@ -218,3 +218,32 @@ def _dedupe(path: np.ndarray) -> np.ndarray:
     """Drops waypoints within 1e-9 rad of their predecessor."""
     keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-9])
     return path[keep]
+
+
+class SceneGcs:
+    """A ``GcsPlanner`` used only while the scene is the one its regions were grown in.
+
+    Args:
+        scene: the ``PlanningScene``.
+        regions: a ``planning._regions.RegionSet`` (its ``key`` names the scene it fits).
+        region_options: the ``RegionOptions`` they were grown with (defaults when None).
+        options: ``GcsOptions``.
+    """
+
+    def __init__(self, scene, regions, region_options=None, options: GcsOptions | None = None):
+        from planning._regions import RegionOptions
+
+        self._scene, self._regions = scene, regions
+        self._region_options = region_options or RegionOptions()
+        self._planner = GcsPlanner(scene, regions, options)
+
+    def path(self, q_start, q_goal, deadline: float) -> np.ndarray | None:
+        """A validated GCS path, or None when it fails or the scene changed since the regions
+        were grown (same cache key as ``planning._regions.region_key``)."""
+        from planning._regions import region_key
+
+        key = region_key(self._scene, self._regions.seeds, self._region_options)
+        if key != self._regions.key:
+            return None
+        result = self._planner.plan(q_start, q_goal, deadline)
+        return result.path if result.success else None

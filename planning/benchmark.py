@@ -121,7 +121,34 @@ def summarize(rows: list[dict]) -> str:
     for family in [*families, "all"]:
         group = [r for r in rows if family in ("all", r["family"]) and r["valid"]]
         lines.append(f"{family:24s} {len(group):5d} " + _stats(group, compare))
+    if compare:
+        lines.append(speedup(rows))
     return "\n".join(lines)
+
+
+def speedup(rows: list[dict]) -> str:
+    """One line comparing times on the valid problems: OMPL's median over ours (each side's
+    failures counted at the time they took, the timeout), the same over the problems both
+    solved, and the median of the per-problem ratios."""
+    valid = [r for r in rows if r["valid"] and r.get("ompl_time_s") and r["time_s"]]
+    both = [r for r in valid if r["success"] and r.get("ompl_success")]
+    if not valid:
+        return "speed-up: no valid problem timed by both"
+
+    def ratio(group):
+        ours = np.median([r["time_s"] for r in group])
+        return np.median([r["ompl_time_s"] for r in group]) / ours, ours
+
+    all_ratio, _ = ratio(valid)
+    text = f"speed-up (OMPL median / ours): {all_ratio:.1f}x over {len(valid)} valid problems"
+    if both:
+        both_ratio, ours = ratio(both)
+        per = np.median([r["ompl_time_s"] / r["time_s"] for r in both])
+        text += (
+            f"; {both_ratio:.1f}x over the {len(both)} both solved (ours {ours * 1e3:.1f} ms), "
+            f"per-problem median ratio {per:.1f}x"
+        )
+    return text
 
 
 def _stats(group: list[dict], compare: bool) -> str:

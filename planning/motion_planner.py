@@ -39,33 +39,8 @@ from planning._rrt import (
 from planning._rrt_batch import rrt_connect_batch
 from planning._sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.errors import ErrorCode, PlanningError
-from planning.plan import Plan, describe_scene
+from planning.plan import Plan, PlanResult, describe_scene
 from planning.robot_state import RobotState
-
-
-@dc.dataclass
-class PlanResult:
-    """The outcome of a request.
-
-    Attributes:
-        success: true when the whole request was met with a validated path.
-        trajectory: the timed ``Plan`` (for a partial Cartesian path, the part achieved).
-        code: None on success, else the ``ErrorCode``.
-        message: what happened.
-        planning_time: wall time from request to validated path, s.
-        fraction: share of a Cartesian path achieved (1 for other requests).
-    """
-
-    success: bool
-    trajectory: Plan | None
-    code: ErrorCode | None = None
-    message: str = ""
-    planning_time: float = 0.0
-    fraction: float = 1.0
-
-    @property
-    def plan(self) -> Plan | None:
-        return self.trajectory
 
 
 class MotionPlanner:
@@ -84,7 +59,7 @@ class MotionPlanner:
         self._state = state if state is not None else RobotState(scene)
         if self._options.sphere_checks:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.sphere_slack)
-        self._gcs = None  # (GcsPlanner, RegionSet, RegionOptions) after use_gcs()
+        self._gcs = None  # a planning._gcs.SceneGcs after use_gcs()
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
@@ -101,27 +76,13 @@ class MotionPlanner:
             gcs_options: ``GcsOptions``; the planner's validation step and speed limits when
                 None.
         """
-        from planning._gcs import GcsOptions, GcsPlanner
-        from planning._regions import RegionOptions
+        from planning._gcs import GcsOptions, SceneGcs
 
         opts = self._options
         gcs_options = gcs_options or GcsOptions(
             validation_resolution=opts.validation_resolution, max_velocity=list(opts.max_velocity)
         )
-        planner = GcsPlanner(self._scene, regions, gcs_options)
-        self._gcs = (planner, regions, region_options or RegionOptions())
-
-    def _gcs_path(self, q_start, q_goal, deadline: float):
-        """A GCS path when ``use_gcs`` was called and the scene is unchanged, else None."""
-        if self._gcs is None:
-            return None
-        from planning._regions import region_key
-
-        planner, regions, region_options = self._gcs
-        if region_key(self._scene, regions.seeds, region_options) != regions.key:
-            return None  # the scene changed since the regions were grown
-        result = planner.plan(q_start, q_goal, deadline)
-        return result.path if result.success else None
+        self._gcs = SceneGcs(self._scene, regions, region_options, gcs_options)
 
     @property
     def scene(self):
@@ -332,7 +293,7 @@ class MotionPlanner:
         path = np.vstack([q_start, q_goal])
         if not adapter.edge_free(q_start, q_goal):
             how = "rrt_connect"
-            path = self._gcs_path(q_start, q_goal, deadline)
+            path = self._gcs.path(q_start, q_goal, deadline) if self._gcs else None
             if path is not None:
                 how = "gcs"
             while path is None and time.perf_counter() < deadline:

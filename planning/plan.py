@@ -335,3 +335,28 @@ def _rounded(value):
     if isinstance(value, dict):
         return {k: _rounded(v) for k, v in value.items()}
     return value
+
+
+@dataclass
+class PlanResult:
+    """The outcome of a request.
+
+    Attributes:
+        success: true when the whole request was met with a validated path.
+        trajectory: the timed ``Plan`` (for a partial Cartesian path, the part achieved).
+        code: None on success, else the ``ErrorCode``.
+        message: what happened.
+        planning_time: wall time from request to validated path, s.
+        fraction: share of a Cartesian path achieved (1 for other requests).
+    """
+
+    success: bool
+    trajectory: Plan | None
+    code: ErrorCode | None = None
+    message: str = ""
+    planning_time: float = 0.0
+    fraction: float = 1.0
+
+    @property
+    def plan(self) -> Plan | None:
+        return self.trajectory

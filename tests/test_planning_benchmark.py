@@ -95,6 +95,14 @@ def test_summary_table():
     ]
     table = mut.summarize(rows)
     assert "f " in table and "100.0" in table and "2.00" in table
+    assert "speed-up" not in table
+    rows[0].update(ompl_success=True, ompl_time_s=0.5, ompl_path_length=2.5)
+    rows.append(dict(rows[0], problem=3, time_s=0.3, ompl_success=False, ompl_time_s=5.0))
+    table = mut.summarize(rows)
+    # Medians: ours 0.2 s, OMPL 2.75 s over both valid problems; 0.1 vs 0.5 s on the one
+    # both solved.
+    assert "13.8x over 2 valid problems" in table
+    assert "5.0x over the 1 both solved (ours 100.0 ms)" in table
 
 
 def test_plot_writes_a_png(tmp_path):

@@ -199,3 +199,45 @@ def test_edges_and_prefixes_match_drake_samples(scene, dut):
     np.testing.assert_allclose(adapter.free_prefixes(qa, qb), drake.free_prefixes(qa, qb))
     for a, b in zip(qa, qb, strict=True):
         assert adapter.edge_free(a, b) == drake.edge_free(a, b)
+
+
+def test_prefixes_stop_at_the_first_blocking_sample(scene, dut):
+    """The compiled scan of segments agrees with classifying every sample: it stops at the
+    first COLLIDING sample (or the first uncertain one with stop_at_unknown) and lists the
+    UNKNOWN samples before it."""
+    scene.add_box("wall", [0.05, 0.8, 0.8], RigidTransform([0.45, 0.0, 0.4]))
+    qs = random_q(scene, 60, seed=6)
+    q_a, q_b, step = qs[:30], qs[30:], 0.1
+    for stop_at_unknown in (False, True):
+        first, n, edge, local = dut.prefixes(q_a, q_b, step, stop_at_unknown)
+        for k in range(len(q_a)):
+            t = np.arange(1, n[k] + 1) / n[k]
+            state = dut.classify(q_a[k] + t[:, None] * (q_b[k] - q_a[k]))
+            blocking = (state != mut.FREE) if stop_at_unknown else (state == mut.COLLIDING)
+            expected = int(np.argmax(blocking)) if blocking.any() else n[k]
+            assert first[k] == expected
+            unknown = np.flatnonzero(state[:expected] == mut.UNKNOWN)
+            np.testing.assert_array_equal(local[edge == k], unknown)
+    assert len(n) == 30 and np.all(n == np.ceil(np.linalg.norm(q_b - q_a, axis=1) / step))
+
+
+def test_drake_decides_uncertain_configurations_after_the_fallback_count(scene, dut):
+    """Before ``fallback_after`` sphere classifications an UNKNOWN configuration counts as
+    colliding and Drake is not asked; from then on Drake decides it."""
+    scene.load_yaml(config_dir() / "pickplace.yaml")
+    qs = random_q(scene, 400, seed=7)
+    state = dut.classify(qs)
+    unknown = qs[state == mut.UNKNOWN]
+    assert len(unknown) > 0
+    free = drake_free(scene, unknown)
+    assert free.any()  # some are free for Drake: the spheres were only unsure
+    late = SphereCheckerAdapter(scene, fallback_after=10**9)
+    assert not late.configs_free(unknown).any() and late.counts["drake"] == 0
+    early = SphereCheckerAdapter(scene, fallback_after=0)
+    np.testing.assert_array_equal(early.configs_free(unknown), free)
+    assert early.counts["drake"] == len(unknown)
+    # The switch happens when the count of configurations the spheres decided is reached.
+    switch = SphereCheckerAdapter(scene, fallback_after=int((state != mut.UNKNOWN).sum()))
+    assert not switch.configs_free(unknown).any()
+    switch.configs_free(qs)  # the spheres decide that many here
+    np.testing.assert_array_equal(switch.configs_free(unknown), free)

@@ -1,0 +1,86 @@
+"""Planning time of the pick-and-place motion sequence (the MotionPlanner alone, no simulation).
+
+    python benchmarks/pick_sequence_benchmark.py [--scene config/pickplace.yaml] [--repeats 5]
+
+On the pick-and-place scene: ready -> pre-grasp (pose goal 12 cm above the grasp, hand down)
+-> grasp (Cartesian down, fingers ``PickPlaceOptions.grasp_depth`` below the object's top) ->
+the object attached -> lift (Cartesian, 15 cm up) -> pre-place over the obstacle (pose goal
+15 cm above the place) -> place (Cartesian down, the object 5 mm above its target). Each
+repeat uses a fresh ``MotionPlanner`` on a freshly loaded scene. Prints each step's planning
+time (median over the repeats) and the median total; exit code 1 when a step fails.
+"""
+
+import argparse
+import statistics
+import sys
+import time
+
+import numpy as np
+from pydrake.math import RigidTransform, RotationMatrix
+
+from drake_sim.resources import config_dir
+from planning import MotionPlanner, PlanningScene
+from planning.pick_place import PickPlaceOptions
+
+R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # the hand's z axis along -z_W
+STEPS = ("pre-grasp", "grasp", "lift", "pre-place", "place")
+
+
+def plan_sequence(scene: PlanningScene) -> dict[str, float]:
+    """Plans the sequence once; returns each step's planning time, s."""
+    planner = MotionPlanner(scene)
+    p_WO = scene.object_pose("object").translation()
+    height = scene.world_objects["object"].size[2]
+    # The hand's TCP holds the object grasp_depth below its top: p_WG = p_WO + [0, 0, offset].
+    offset = 0.5 * height - min(PickPlaceOptions().grasp_depth, 0.5 * height)
+    p_place = np.asarray(scene.place_position, dtype=float)
+    q = planner.state.named("ready")
+    times = {}
+
+    def run(name, request, *args):
+        nonlocal q
+        start = time.perf_counter()
+        result = request(*args, q_start=q)
+        times[name] = time.perf_counter() - start
+        if not result.success:
+            raise RuntimeError(f"{name}: {result.message}")
+        q = result.plan.waypoints[-1]
+
+    def above(p, height):
+        return RigidTransform(R_DOWN, p + [0.0, 0.0, height])
+
+    run("pre-grasp", planner.plan_to_pose, above(p_WO, offset + 0.12))
+    run("grasp", planner.plan_cartesian, above(p_WO, offset))
+    scene.attach("object", q)
+    run("lift", planner.plan_cartesian, above(p_WO, offset + 0.15))
+    run("pre-place", planner.plan_to_pose, above(p_place, offset + 0.15))
+    run("place", planner.plan_cartesian, above(p_place, offset + 0.005))
+    return times
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default=str(config_dir() / "pickplace.yaml"))
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args(argv)
+    rows = []
+    for _ in range(args.repeats):
+        scene = PlanningScene()
+        scene.load_yaml(args.scene)
+        try:
+            rows.append(plan_sequence(scene))
+        except RuntimeError as e:
+            print(f"failed: {e}", file=sys.stderr)
+            return 1
+    for name in STEPS:
+        print(f"{name:10s} {statistics.median(r[name] for r in rows) * 1e3:7.1f} ms")
+    totals = [sum(r.values()) for r in rows]
+    print(
+        f"total      {statistics.median(totals) * 1e3:7.1f} ms median of {len(rows)} "
+        f"(min {min(totals) * 1e3:.1f}, max {max(totals) * 1e3:.1f})"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
