@@ -167,10 +167,22 @@ def _near_box(x, y, z, reach, obj):
 
 
 @njit(cache=True)
+def _gap2(a, i, b, j):
+    """Squared distance between the points a[i] and b[j], m^2."""
+    u = a[i, 0] - b[j, 0]
+    v = a[i, 1] - b[j, 1]
+    w = a[i, 2] - b[j, 2]
+    return u * u + v * v + w * w
+
+
+@njit(cache=True)
 def _classify_one(q, d, stop_at_unknown, work):
     """FREE, COLLIDING or UNKNOWN for the arm configuration q (7,). With
     ``stop_at_unknown``, returns at the first uncertain sphere (UNKNOWN, though a later
-    sphere might prove a collision). ``work`` holds scratch arrays (``_work``)."""
+    sphere might prove a collision). ``work`` holds scratch arrays (``_work``).
+
+    The innermost loops are written out: small helpers there (a sphere centre on demand, the
+    three-way verdict) measured twice as slow."""
     full, T, centres, seen, bodies, groups, near, stamp = work
     stamp[0] += 1
     now = stamp[0]
@@ -216,8 +228,9 @@ def _classify_one(q, d, stop_at_unknown, work):
             best = np.inf
             for i in range(count):
                 o = near[b, i]
-                d2 = _distance2(centres[c, 0], centres[c, 1], centres[c, 2], objects[o])
-                best = min(best, d2)
+                best = min(
+                    best, _distance2(centres[c, 0], centres[c, 1], centres[c, 2], objects[o])
+                )
             if best < d.env_in[e, m]:
                 return COLLIDING
             if best < d.env_out[e, m]:
@@ -225,20 +238,10 @@ def _classify_one(q, d, stop_at_unknown, work):
                     return UNKNOWN
                 state = UNKNOWN
     for p in range(len(d.body_pair_reach2)):
-        a = d.body_pair[p, 0]
-        b = d.body_pair[p, 1]
-        u = bodies[a, 0] - bodies[b, 0]
-        v = bodies[a, 1] - bodies[b, 1]
-        w = bodies[a, 2] - bodies[b, 2]
-        if u * u + v * v + w * w >= d.body_pair_reach2[p]:
+        if _gap2(bodies, d.body_pair[p, 0], bodies, d.body_pair[p, 1]) >= d.body_pair_reach2[p]:
             continue
         for k in range(d.body_pair_start[p], d.body_pair_start[p + 1]):
-            g = d.pair_group[k, 0]
-            h = d.pair_group[k, 1]
-            u = groups[g, 0] - groups[h, 0]
-            v = groups[g, 1] - groups[h, 1]
-            w = groups[g, 2] - groups[h, 2]
-            if u * u + v * v + w * w >= d.pair_reach2[k]:
+            if _gap2(groups, d.pair_group[k, 0], groups, d.pair_group[k, 1]) >= d.pair_reach2[k]:
                 continue
             for m in range(d.pair_a.shape[1]):
                 if d.pair_out[k, m] < 0.0:
