@@ -183,22 +183,19 @@ class SphereCollisionModel:
             [i * len(present) + j for i, j, _, _ in checked],
             [i * len(present) + j for i, j in body_pairs] + [np.inf],
         )
-        n_pairs = _GROUP * _GROUP
-        pair_a = np.zeros((len(checked), n_pairs), dtype=np.int64)
-        pair_b = np.zeros((len(checked), n_pairs), dtype=np.int64)
-        pair_out = np.full((len(checked), n_pairs), -1.0)
-        pair_in = np.full((len(checked), n_pairs), -1.0)
-        reach = np.zeros(len(checked))
-        for k, (_, _, g, h) in enumerate(checked):
-            (a, ma), (b, mb) = groups[g], groups[h]
-            pad = self._padding[a, b]
-            reach[k] = group_radius[g] + group_radius[h] + max(pad, 0.0) + _MARGIN
-            ia, ib = np.repeat(ma, len(mb)), np.tile(mb, len(ma))
-            count = len(ia)
-            pair_a[k, :count], pair_b[k, :count] = ia, ib
-            pair_out[k, :count] = _squared(radius[ia] + radius[ib] + max(pad, 0) + _MARGIN)
-            ok = (inner[ia] > 0) & (inner[ib] > 0)
-            pair_in[k, :count] = _squared(np.where(ok, inner[ia] + inner[ib] + pad - _MARGIN, -1.0))
+        # Every (sphere of g, sphere of h) of each checked group pair, _GROUP**2 per row.
+        g, h = (np.array([c[k] for c in checked], dtype=np.int64) for k in (2, 3))
+        shape = (len(checked), _GROUP * _GROUP)
+        pair_a = np.broadcast_to(members[g][:, :, None], (len(g), _GROUP, _GROUP)).reshape(shape)
+        pair_b = np.broadcast_to(members[h][:, None, :], (len(h), _GROUP, _GROUP)).reshape(shape)
+        valid = (used[g][:, :, None] & used[h][:, None, :]).reshape(shape)
+        owner_of = np.array([b for b, _ in groups], dtype=np.int64)  # body index of each group
+        pad = self._padding[owner_of[g], owner_of[h]].reshape(-1, 1)
+        reach = group_radius[g] + group_radius[h] + np.maximum(pad[:, 0], 0.0) + _MARGIN
+        r_out = radius[pair_a] + radius[pair_b] + np.maximum(pad, 0.0) + _MARGIN
+        pair_out = np.where(valid, _squared(r_out), -1.0)
+        ok = valid & (inner[pair_a] > 0) & (inner[pair_b] > 0)
+        pair_in = np.where(ok, _squared(inner[pair_a] + inner[pair_b] + pad - _MARGIN), -1.0)
         body_pad = np.array(
             [max(self._padding[present[i], present[j]], 0.0) for i, j in body_pairs]
         )
