@@ -186,6 +186,12 @@ def test_unsupported_geometry_falls_back_to_drake(scene, dut, monkeypatch):
     np.testing.assert_array_equal(
         SphereCheckerAdapter(scene).configs_free(qs), drake_free(scene, qs)
     )
+    # Segments too: everything goes to Drake (from free starts), or blocks before the fallback.
+    qa, qb = qs[:25][drake_free(scene, qs[:25])], qs[25:][drake_free(scene, qs[:25])]
+    expected = CheckerAdapter(scene, 0.05).free_prefixes(qa, qb)
+    np.testing.assert_allclose(SphereCheckerAdapter(scene, 0.05).free_prefixes(qa, qb), expected)
+    waiting = SphereCheckerAdapter(scene, 0.05, fallback_after=10**9)
+    assert not waiting.free_prefixes(qa, qb).any()
 
 
 def test_edges_and_prefixes_match_drake_samples(scene, dut):
