@@ -183,6 +183,9 @@ def _classify_one(q, d, stop_at_unknown, work):
 
     The innermost loops are written out: small helpers there (a sphere centre on demand, the
     three-way verdict) measured twice as slow."""
+    for k in range(len(q)):
+        if not np.isfinite(q[k]):
+            return UNKNOWN  # never proven free: comparisons with NaN are all false
     full, T, centres, seen, bodies, groups, near, stamp = work
     stamp[0] += 1
     now = stamp[0]
@@ -309,7 +312,8 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
         length = 0.0
         for j in range(q_a.shape[1]):
             length += (q_b[k, j] - q_a[k, j]) ** 2
-        n[k] = max(1, int(np.ceil(np.sqrt(length) / step)))
+        # One sample (the end) for a segment of unknown length, e.g. with a NaN end.
+        n[k] = max(1, int(np.ceil(np.sqrt(length) / step))) if np.isfinite(length) else 1
     unknown_edge = np.empty(n.sum(), dtype=np.int64)
     unknown_local = np.empty(n.sum(), dtype=np.int64)
     n_unknown = 0

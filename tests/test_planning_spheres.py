@@ -247,3 +247,12 @@ def test_drake_decides_uncertain_configurations_after_the_fallback_count(scene, 
     assert not switch.configs_free(unknown).any()
     switch.configs_free(qs)  # the spheres decide that many here
     np.testing.assert_array_equal(switch.configs_free(unknown), free)
+
+
+def test_non_finite_configurations_are_never_proven_free(scene, dut):
+    q = scene.model.named_configurations["ready"].copy()
+    q[2] = np.nan
+    assert dut.classify(q[None])[0] == mut.UNKNOWN
+    qs = np.vstack([scene.model.named_configurations["ready"], q])
+    first, n, edge, local = dut.prefixes(qs[:1], qs[1:], 0.1, stop_at_unknown=True)
+    assert first[0] < n[0]  # the NaN end blocks the segment
