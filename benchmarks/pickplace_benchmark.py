@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from diagrams.panda_station import load_station_config
 from diagrams.planning_station import make_planning_station
@@ -24,10 +25,6 @@ from planning.scene_generator import random_scene
 
 
 def _progress(items, label):
-    try:
-        from tqdm import tqdm
-    except ImportError:
-        return items
     return tqdm(items, desc=label, leave=False, file=sys.stderr, disable=None)
 
 

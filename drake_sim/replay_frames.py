@@ -102,8 +102,9 @@ def capture_replay(
     own = browser is None
     if own:
         browser = HeadlessBrowser(size=size)
-    try:
+    else:
         browser.set_size(size)
+    try:
         script = browser.call("Page.addScriptToEvaluateOnNewDocument", {"source": _COUNT_FETCHES})
         browser.open(file_url(html))
         browser.call("Page.removeScriptToEvaluateOnNewDocument", script)
@@ -170,23 +171,13 @@ def _camera(text: str) -> list[float]:
     return values
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}")
-    return value
-
-
 def _parse_args(argv):
     parser = cli.ArgumentParser(
         prog="python -m drake_sim.replay_frames", description=__doc__.split("\n")[0]
     )
     parser.add_argument("replay", type=Path, help="a Meshcat replay HTML (--record)")
     parser.add_argument("out", type=Path, help="the GIF to write")
-    parser.add_argument("--frames", type=_count, default=40, help="pictures (default 40)")
+    parser.add_argument("--frames", type=cli.positive_int, default=40, help="pictures (default 40)")
     parser.add_argument("--size", type=_size, default=(640, 400), help="WxH (default 640x400)")
     parser.add_argument("--fps", type=cli.positive_float, default=10.0, help="GIF frame rate")
     parser.add_argument("--start", type=float, default=0.0, help="first frame's time (s)")

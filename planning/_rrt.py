@@ -249,11 +249,7 @@ def rrt_connect(
         reached = _connect(adapter, b, a.q[new], step)
         if reached is None:
             continue
-        branch_a, branch_b = a.branch(new), b.branch(reached)
-        path = np.asarray(branch_a + branch_b[::-1])  # the meeting point appears twice
-        if iteration % 2 == 1:
-            path = path[::-1]
-        return _drop_duplicates(path)
+        return joined_path(a, new, b, reached, reverse=iteration % 2 == 1)
     return None
 
 
@@ -291,6 +287,13 @@ def _connect(adapter, tree: _Tree, target: np.ndarray, step: float) -> int | Non
     if reach >= dist - 1e-9:
         return tree.add(target.copy(), index)
     return None
+
+
+def joined_path(a: _Tree, i: int, b: _Tree, j: int, *, reverse: bool) -> np.ndarray:
+    """The path from a's root to its node i, which meets node j of b, then on to b's root
+    (the meeting point once); reversed when tree a grew from the goal."""
+    path = np.asarray(a.branch(i) + b.branch(j)[::-1])
+    return _drop_duplicates(path[::-1] if reverse else path)
 
 
 def _drop_duplicates(path: np.ndarray) -> np.ndarray:

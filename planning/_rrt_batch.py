@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from planning._rrt import _drop_duplicates, _Tree
+from planning._rrt import _Tree, joined_path
 
 
 def rrt_connect_batch(
@@ -64,10 +64,7 @@ def rrt_connect_batch(
         if found is None:
             continue
         k, reached = found
-        path = np.asarray(a.branch(new[k]) + b.branch(reached)[::-1])
-        if round_ % 2 == 1:
-            path = path[::-1]
-        return _drop_duplicates(path)
+        return joined_path(a, new[k], b, reached, reverse=round_ % 2 == 1)
     return None
 
 

@@ -8,8 +8,9 @@ free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` fo
 cannot decide. Every path is re-checked at ``validation_resolution`` (0.01 rad) before it is
 returned, accepting a configuration only when the spheres prove it free or Drake's checker
 finds it free; a segment failing that check is re-planned with edges checked at that
-resolution. The path is then timed rest to rest
-within the scaled velocity and acceleration limits (``planning._retime``) into a ``Plan``.
+resolution. The path is then timed within the scaled velocity and acceleration limits
+(``planning._retime``: TOPP-RA, stopping only at sharp corners; rest to rest where the
+rounded corners would graze an obstacle) into a ``Plan``.
 
 Requests start from the planner's ``RobotState`` (its current q; MoveIt's "current state")
 unless given ``q_start``. Failures raise ``PlanningError`` with a code; a Cartesian path that
@@ -270,9 +271,9 @@ class MotionPlanner:
     def _adapter(self, resolution: float | None = None, *, search: bool = False):
         """Collision queries: sphere models first when enabled (``planning._sphere_checker``).
         A search adapter leaves Drake out for ``drake_fallback_after`` sphere-checked
-        configurations (what the spheres
-        cannot decide counts as colliding), then asks it too; a validating one always does,
-        so validation accepts exactly what Drake's checker accepts."""
+        configurations (what the spheres cannot decide counts as colliding), then asks it
+        too; a validating one always does, so validation accepts exactly what Drake's checker
+        accepts."""
         opts = self._options
         if not opts.sphere_checks:
             return CheckerAdapter(self._scene, resolution)

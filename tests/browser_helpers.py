@@ -9,6 +9,9 @@ from PIL import Image
 from drake_sim.browser import find_chromium
 from drake_sim.resources import models_dir
 
+# A page expression: the number of meshes in the Meshcat scene.
+COUNT_MESHES = "(() => { let n = 0; viewer.scene.traverse(o => { n += !!o.isMesh; }); return n })()"
+
 
 def require_chromium() -> str:
     """Returns the browser's path, or skips the test with the reason."""
@@ -32,7 +35,8 @@ def robot_pixels(picture: Image.Image, *, tolerance: float = 0.05) -> int:
     rgb = np.asarray(picture.convert("RGB"), dtype=float)
     total = rgb.sum(axis=-1)
     chroma = rgb / np.maximum(total, 1.0)[..., None]
-    reference = body_rgb() / body_rgb().sum()
+    body = body_rgb()
+    reference = body / body.sum()
     close = np.abs(chroma - reference).max(axis=-1) < tolerance
     return int(np.count_nonzero(close & (total > 150)))
 

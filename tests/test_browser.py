@@ -12,12 +12,16 @@ import drake_sim.browser as mut
 from drake_sim import flip
 from drake_sim.flip_run import FlipRun
 from drake_sim.replay_frames import capture_replay
-from tests.browser_helpers import assert_not_blank, require_chromium, robot_pixels
+from tests.browser_helpers import (
+    COUNT_MESHES,
+    assert_not_blank,
+    require_chromium,
+    robot_pixels,
+)
 from tests.flip_helpers import default_robot, flip_scenario
 
 SIZE = (640, 400)
 MIN_ROBOT_PIXELS = 150  # The body covers 250 to 1 000 pixels at this size; the rest has none.
-COUNT_MESHES = "(() => { let n = 0; viewer.scene.traverse(o => { n += !!o.isMesh; }); return n })()"
 
 
 def test_find_chromium_follows_the_override(monkeypatch):

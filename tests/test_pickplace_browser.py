@@ -14,9 +14,8 @@ import pytest
 from PIL import Image
 
 from drake_sim.browser import HeadlessBrowser
-from tests.browser_helpers import assert_not_blank, require_chromium
+from tests.browser_helpers import COUNT_MESHES, assert_not_blank, require_chromium
 
-COUNT_MESHES = "(() => { let n = 0; viewer.scene.traverse(o => { n += !!o.isMesh; }); return n })()"
 CLICK_PICK = """(() => {
   const label = Array.from(document.querySelectorAll('.property-name'))
       .find(e => e.textContent.trim() === 'Pick');

@@ -94,6 +94,16 @@ def test_over_the_obstacle_needs_a_search_and_stays_free(dut, scene):
     assert_fine_collision_free(scene, result.trajectory.waypoints)
 
 
+def test_one_extension_per_query_also_finds_a_free_path(dut, scene):
+    """rrt_batch 1: the classic RRT-Connect (planning._rrt.rrt_connect) instead of batches."""
+    q_a = dut.plan_to_pose(above(OBJECT, 0.06)).trajectory.waypoints[-1]
+    q_b = dut.plan_to_pose(above(PLACE, 0.06), q_start=q_a).trajectory.waypoints[-1]
+    planner = mut.MotionPlanner(scene, mut.MotionPlannerOptions(rrt_batch=1))
+    path = planner.plan_to_joints(q_b, q_start=q_a).trajectory.waypoints
+    np.testing.assert_array_equal(path[[0, -1]], [q_a, q_b])
+    assert_fine_collision_free(scene, path)
+
+
 def test_cartesian_descent_is_complete(dut, scene):
     q_pre = dut.plan_to_pose(above(OBJECT, 0.15)).trajectory.waypoints[-1]
     result = dut.plan_cartesian(above(OBJECT, 0.08), q_start=q_pre)
