@@ -1,7 +1,6 @@
 """Small helpers of the Panda station: a free body's pose from its positions, and the object."""
 
 import numpy as np
-from pydrake.common.eigen_geometry import Quaternion
 from pydrake.common.value import Value
 from pydrake.geometry import AddContactMaterial, Box, ProximityProperties, Rgba
 from pydrake.math import RigidTransform, RollPitchYaw
@@ -10,6 +9,7 @@ from pydrake.multibody.tree import RigidBody, SpatialInertia
 from pydrake.systems.framework import LeafSystem
 
 from planning.scene_io import BoxSpec
+from planning.scene_objects import free_body_pose
 
 
 class FreeBodyPose(LeafSystem):
@@ -37,17 +37,6 @@ class FreeBodyPose(LeafSystem):
 
     def CalcPose(self, context, output) -> None:
         output.set_value(free_body_pose(self._input.Eval(context)[:7]))
-
-
-def free_body_pose(q: np.ndarray) -> RigidTransform:
-    """X_WB from a free body's 7 positions [qw, qx, qy, qz, x, y, z] (quaternion normalised)."""
-    quaternion = np.asarray(q[:4], dtype=float)
-    return RigidTransform(Quaternion(quaternion / np.linalg.norm(quaternion)), q[4:7])
-
-
-def free_body_positions(X_WB: RigidTransform) -> np.ndarray:
-    """The 7 positions [qw, qx, qy, qz, x, y, z] of a free body at X_WB."""
-    return np.concatenate([X_WB.rotation().ToQuaternion().wxyz(), X_WB.translation()])
 
 
 def box_pose(box: BoxSpec) -> RigidTransform:

@@ -41,12 +41,7 @@ from pydrake.systems.primitives import (
 )
 from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
 
-from diagrams._panda_station_systems import (
-    FreeBodyPose,
-    add_scene_box,
-    box_pose,
-    free_body_positions,
-)
+from diagrams._panda_station_systems import FreeBodyPose, add_scene_box, box_pose
 from drake_sim.errors import ConfigError
 from drake_sim.resources import config_dir
 from planning.config import PandaModelConfig
@@ -58,6 +53,7 @@ from planning.panda_model import (
     disabled_collision_pairs,
 )
 from planning.scene_io import SceneFile
+from planning.scene_objects import free_body_positions
 
 PANDA = "panda"
 """The Panda's model instance name; its ports are ``panda.<signal>``."""

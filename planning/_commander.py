@@ -15,6 +15,8 @@ from pydrake.common.value import Value
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
+from planning.scene_objects import free_body_positions
+
 
 @dc.dataclass(frozen=True)
 class ArmCommand:
@@ -64,9 +66,12 @@ class ArmCommand:
         return self.plan.sample(self.plan_time(t))[0]
 
     def stopped(self, t: float, max_acceleration: np.ndarray) -> ArmCommand:
-        """Returns the command that brings the arm to rest along the plan from time t."""
-        if self.plan is None or t >= self.end_time():
+        """Returns the command that brings the arm to rest along the plan from time t (past the
+        plan's end, one that marks it stopped at t: it already rests there)."""
+        if self.plan is None:
             return self
+        if t >= self.end_time():
+            return self if self.stop_at is not None else dc.replace(self, stop_at=t)
         _, v, _ = self.plan.sample(self.plan_time(t))
         # Slowing the path rate linearly over T scales the velocity by (1 - s/T) and adds -v/T:
         # twice the most limited joint's braking time keeps that term under half its limit.
@@ -191,9 +196,7 @@ class ObjectFollower(LeafSystem):
         return self.X_WA(self._state.Eval(context)[:9]) @ grip.X_AO
 
     def CalcPositions(self, context, output) -> None:
-        X_WO = self.pose(context)
-        quaternion = X_WO.rotation().ToQuaternion().wxyz()
-        output.SetFromVector(np.concatenate([quaternion, X_WO.translation()]))
+        output.SetFromVector(free_body_positions(self.pose(context)))
 
     def grab(self, context) -> None:
         """The hand carries the object from now on, keeping its current pose relative to A."""
@@ -204,6 +207,3 @@ class ObjectFollower(LeafSystem):
     def release(self, context) -> None:
         """The object stays where it is now."""
         context.get_mutable_abstract_state(self._grip).set_value(Grip(self.pose(context)))
-
-    def held(self, context) -> bool:
-        return context.get_abstract_state(self._grip).get_value().X_AO is not None

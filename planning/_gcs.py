@@ -26,7 +26,13 @@ import time
 
 import numpy as np
 
-from planning._rrt import CheckerAdapter, densify, first_invalid_segment, path_length
+from planning._rrt import (
+    CheckerAdapter,
+    _drop_duplicates,
+    densify,
+    first_invalid_segment,
+    path_length,
+)
 
 
 @dc.dataclass
@@ -127,7 +133,7 @@ class GcsPlanner:
             middle = self._solve(ends[0], ends[1])
             if middle is None:
                 return fail(f"GCS found no path through the regions ({repairs} cuts)", repairs)
-            path = _dedupe(np.vstack([q_start, middle, q_goal]))
+            path = _drop_duplicates(np.vstack([q_start, middle, q_goal]), tolerance=1e-9)
             path[0], path[-1] = q_start, q_goal  # exactly
             bad = first_invalid_segment(self._fine, path, self._options.validation_resolution)
             if bad is None:
@@ -212,12 +218,6 @@ class GcsPlanner:
             self._regions[i] = HPolyhedron(np.vstack([r.A(), a]), np.append(r.b(), b))
             cut = True
         return cut
-
-
-def _dedupe(path: np.ndarray) -> np.ndarray:
-    """Drops waypoints within 1e-9 rad of their predecessor."""
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-9])
-    return path[keep]
 
 
 class SceneGcs:

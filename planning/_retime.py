@@ -54,7 +54,8 @@ class RetimeOptions:
     Attributes:
         method: "toppra" (stops only at sharp corners) or "rest_to_rest" (stops at every
             waypoint; the timing of version-1 plan files).
-        max_corner_angle: rad; the robot stops at waypoints where the path turns by more.
+        max_corner_angle: rad, in [0, pi); the robot stops at waypoints where the path turns
+            by more.
         path_tolerance: rad; largest joint-space L2 distance between a smoothed section and
             the straight segments it replaces.
         margin: fraction by which TOPP-RA's limits are shrunk (its grid misses the peaks).
@@ -68,7 +69,10 @@ class RetimeOptions:
     def __post_init__(self):
         if self.method not in ("toppra", "rest_to_rest"):
             raise ValueError(f"unknown timing method {self.method!r}")
-        if self.max_corner_angle < 0 or self.path_tolerance < 0 or not 0 <= self.margin < 0.5:
+        # Ends and repeated waypoints turn by pi: an angle of pi or more would stop nowhere.
+        if not 0 <= self.max_corner_angle < np.pi:
+            raise ValueError(f"max_corner_angle must be in [0, pi), got {self.max_corner_angle}")
+        if self.path_tolerance < 0 or not 0 <= self.margin < 0.5:
             raise ValueError(f"bad RetimeOptions {self}")
 
 
@@ -186,7 +190,6 @@ class _Smooth:
             raise RuntimeError("TOPP-RA found no parameterization")
         self._s_dot, self._s_ddot = self._s.MakeDerivative(1), self._s.MakeDerivative(2)
         self._dq, self._ddq = self._path.MakeDerivative(1), self._path.MakeDerivative(2)
-        self._stretch = 1.0
         end = self._s.end_time()
         ts = np.linspace(0.0, end, _SAMPLES_PER_GRID_INTERVAL * len(grid) + 1)
         v, a = self._rates(ts)
@@ -307,9 +310,11 @@ def plan_sections(waypoints: np.ndarray, options: RetimeOptions) -> list[tuple]:
             continue
         piece = waypoints[i : j + 1]
         knots, mask = piece, np.ones(len(piece), dtype=bool)
-        if np.max(spline_deviation(knots)) > tol:
+        deviation = np.max(spline_deviation(knots))
+        if deviation > tol:
             knots, mask = blend_knots(piece, tol)
-        if np.max(spline_deviation(knots)) <= tol:
+            deviation = np.max(spline_deviation(knots))
+        if deviation <= tol:
             out.append((i, j, knots, mask))
             continue
         m = i + 1 + int(np.argmax(turn[i + 1 : j]))  # stop at the sharpest corner

@@ -296,8 +296,9 @@ def joined_path(a: _Tree, i: int, b: _Tree, j: int, *, reverse: bool) -> np.ndar
     return _drop_duplicates(path[::-1] if reverse else path)
 
 
-def _drop_duplicates(path: np.ndarray) -> np.ndarray:
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-12])
+def _drop_duplicates(path: np.ndarray, tolerance: float = 1e-12) -> np.ndarray:
+    """Drops waypoints within ``tolerance`` rad of their predecessor."""
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > tolerance])
     return path[keep]
 
 

@@ -394,8 +394,6 @@ class MotionPlanningInterface:
             command = self._commander.arm(context)
             accel = np.asarray(self.planner.options.max_acceleration)
             self._commander.set_arm(context, command.stopped(t, accel))
-            if command.stop_at is None and t >= command.end_time():  # already at its end
-                self._commander.set_arm(context, dc.replace(command, stop_at=t))
         elif handle is self._gripper:
             context = self._context(self._commander)
             finger = float(self._commander.gripper(context).sample(t))

@@ -152,12 +152,13 @@ class PickPlaceTask:
         X_WO = self._object_pose()
         if min(obj.size[:2]) < opts.min_object_width:
             return f"the object is thinner than {opts.min_object_width} m"
+        X_WP = self._place_pose(X_WO)
         for name, other in scene.world_objects.items():
             if name in (OBJECT, "table") or other.shape != "box":
                 continue
             if boxes_overlap(obj.size, X_WO, other.size, other.X_PO, opts.overlap_margin):
                 return f"the object overlaps {name!r}"
-            if boxes_overlap(obj.size, self._place_pose(X_WO), other.size, other.X_PO):
+            if boxes_overlap(obj.size, X_WP, other.size, other.X_PO):
                 return f"the place target is inside {name!r}"
         grasps = top_down_grasps(X_WO, obj.size, opts.max_object_width)
         if not grasps:

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.geometry import Box, Cylinder, Shape, Sphere
 from pydrake.math import RigidTransform
 
@@ -109,3 +110,14 @@ def _finite_vector(values, size: int, what: str) -> np.ndarray:
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{what} is not finite: {array.tolist()}")
     return array
+
+
+def free_body_pose(q: np.ndarray) -> RigidTransform:
+    """X_WB from a free body's 7 positions [qw, qx, qy, qz, x, y, z] (quaternion normalised)."""
+    quaternion = np.asarray(q[:4], dtype=float)
+    return RigidTransform(Quaternion(quaternion / np.linalg.norm(quaternion)), q[4:7])
+
+
+def free_body_positions(X_WB: RigidTransform) -> np.ndarray:
+    """The 7 positions [qw, qx, qy, qz, x, y, z] of a free body at X_WB."""
+    return np.concatenate([X_WB.rotation().ToQuaternion().wxyz(), X_WB.translation()])

@@ -11,9 +11,9 @@ from pydrake.systems.primitives import TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
 import diagrams.panda_station as mut
-from diagrams._panda_station_systems import free_body_pose, free_body_positions
 from drake_sim.errors import ConfigError
 from planning.panda_model import build_panda_model
+from planning.scene_objects import free_body_pose, free_body_positions
 
 
 @pytest.fixture(scope="module")

@@ -177,6 +177,9 @@ def test_version_1_files_keep_their_rest_to_rest_timing(dut):
 def test_bad_timing_options_are_rejected():
     with pytest.raises(ValueError):
         mut.RetimeOptions(method="fastest")
+    # The path's ends turn by pi: a corner angle of pi would leave no stop, and no timing.
+    with pytest.raises(ValueError, match="max_corner_angle"):
+        mut.RetimeOptions(max_corner_angle=np.pi)
 
 
 def test_blended_corner_stays_near_the_checked_path(dut):
