@@ -10,11 +10,11 @@ import os
 import platform
 import statistics
 
+from diagrams.flip_scenario import load_flip_scenario
+from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
-from drake_sim.flip_scenario import load_flip_scenario
-from drake_sim.resources import config_dir
-from drake_sim.robot import default_robot_file
-from drake_sim.robot_params import load_robot_params
+from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.robots.ddrive_params import load_robot_params
 
 COLUMNS = (
     ("flips", "flips", "{:.0f}"),

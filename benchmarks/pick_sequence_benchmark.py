@@ -18,9 +18,9 @@ import time
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
-from drake_sim.resources import config_dir
+from drake_sim.base.resources import config_dir
 from planning import MotionPlanner, PlanningScene
-from planning.pick_place import PickPlaceOptions
+from planning.task.pick_place import PickPlaceOptions
 
 R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # the hand's z axis along -z_W
 STEPS = ("pre-grasp", "grasp", "lift", "pre-place", "place")

@@ -20,8 +20,8 @@ from tqdm import tqdm
 
 from diagrams.panda_station import load_station_config
 from diagrams.planning_station import make_planning_station
-from planning.pick_place import PickPlaceTask
-from planning.scene_generator import random_scene
+from planning.task.pick_place import PickPlaceTask
+from planning.task.scene_generator import random_scene
 
 
 def _progress(items, label):

@@ -18,8 +18,8 @@ from pydrake.math import RigidTransform
 from tqdm import tqdm
 
 import planning
-from drake_sim.resources import cache_dir
-from planning import mbm
+from drake_sim.base.resources import cache_dir
+from planning.io import mbm
 
 _DEFAULT_DATASET = (
     Path(__file__).resolve().parent.parent.parent / "shared/benchmarks/mbm_panda/problems.tar.bz2"

@@ -8,9 +8,9 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.visualization import AddFrameTriadIllustration
 
 from diagrams.ddrive_world import ROBOT_NAME, robot_start_pose
-from drake_sim.robot import BODY_LINK, add_robot
-from drake_sim.robot_params import RobotParams
-from drake_sim.scenario import PlanarPose
+from diagrams.world_scenario import PlanarPose
+from drake_sim.robots.ddrive import BODY_LINK, add_robot
+from drake_sim.robots.ddrive_params import RobotParams
 
 
 def make_ddrive_model_diagram(

@@ -11,10 +11,10 @@ from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.visualization import AddFrameTriadIllustration, ApplyVisualizationConfig
 
-from drake_sim.resources import make_parser
-from drake_sim.robot import BODY_LINK, add_robot
-from drake_sim.robot_params import RobotParams
-from drake_sim.scenario import GroundConfig, PlanarPose, WorldScenario
+from diagrams.world_scenario import GroundConfig, PlanarPose, WorldScenario
+from drake_sim.base.resources import make_parser
+from drake_sim.robots.ddrive import BODY_LINK, add_robot
+from drake_sim.robots.ddrive_params import RobotParams
 
 ROBOT_NAME = "ddrive"
 """The robot's model instance name; exported ports are named ``ddrive.<signal>``."""

@@ -8,16 +8,16 @@ from pydrake.systems.primitives import LogVectorOutput, MatrixGain
 from pydrake.visualization import ApplyVisualizationConfig
 
 from diagrams.ddrive_world import ROBOT_NAME, add_ddrive_world, robot_start_pose
-from drake_sim.diff_drive_controller import DiffDriveController
-from drake_sim.flip_controller import FlipController
-from drake_sim.flip_scenario import FlipScenario
-from drake_sim.imu import add_imu
-from drake_sim.odometry import AxleGroundTruth, WheelOdometry, axle_pose
-from drake_sim.robot import BODY_LINK, LEFT_WHEEL_JOINT, RIGHT_WHEEL_JOINT
-from drake_sim.robot_params import RobotParams
-from drake_sim.teleop import MeshcatTeleop
-from drake_sim.trails import TrailVisualizer
-from drake_sim.wheel_drivers import make_wheel_drivers
+from diagrams.flip_scenario import FlipScenario
+from drake_sim.robots.ddrive import BODY_LINK, LEFT_WHEEL_JOINT, RIGHT_WHEEL_JOINT
+from drake_sim.robots.ddrive_params import RobotParams
+from drake_sim.systems.control.diff_drive_controller import DiffDriveController
+from drake_sim.systems.control.flip_controller import FlipController
+from drake_sim.systems.control.wheel_drivers import make_wheel_drivers
+from drake_sim.systems.estimation.odometry import AxleGroundTruth, WheelOdometry, axle_pose
+from drake_sim.systems.sensors.imu import add_imu
+from drake_sim.systems.viewer.teleop import MeshcatTeleop
+from drake_sim.systems.viewer.trails import TrailVisualizer
 
 LOGGED = (
     "true_pose",

@@ -15,7 +15,7 @@ plant and sends the geometry poses to the SceneGraph; ``panda.state`` is the com
 finite-difference velocity.
 
 Settings live in ``config/station.yaml`` (``PandaStationConfig``); the scene comes from our
-pick-and-place YAML (``config/pickplace.yaml``, schema ``planning.scene_io.SceneFile``).
+pick-and-place YAML (``config/pickplace.yaml``, schema ``planning.io.scene_files.SceneFile``).
 """
 
 import dataclasses as dc
@@ -41,18 +41,18 @@ from pydrake.systems.primitives import (
 )
 from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
 
-from diagrams._panda_station_systems import FreeBodyPose, add_scene_box, box_pose
-from drake_sim.errors import ConfigError
-from drake_sim.resources import config_dir
+from diagrams.panda_station_systems import FreeBodyPose, add_scene_box, box_pose
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 from planning.config import PandaModelConfig
-from planning.panda_model import (
+from planning.io.scene_files import SceneFile
+from planning.model.panda import (
     ARM_JOINTS,
     FINGER_JOINTS,
     add_panda,
     apply_disabled_collisions,
     disabled_collision_pairs,
 )
-from planning.scene_io import SceneFile
 from planning.scene_objects import free_body_positions
 
 PANDA = "panda"
@@ -177,7 +177,7 @@ def _add_world(plant: MultibodyPlant, config: PandaStationConfig, *, physics: bo
         _add_actuators(plant, panda, config)
     stiff = {"point_stiffness": config.point_stiffness}
     if scene.table is not None:
-        # planning.panda_model.add_table passes an Rgba where Drake wants an array (a bug).
+        # planning.model.panda.add_table passes an Rgba where Drake wants an array (a bug).
         color = Rgba(0.55, 0.4, 0.25, 1.0)
         friction = _friction(config.table_friction)
         add_scene_box(

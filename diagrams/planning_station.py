@@ -10,9 +10,9 @@ from pydrake.systems.framework import DiagramBuilder
 from diagrams.panda_station import PandaStationConfig, make_panda_station_diagram
 from planning.config import load_panda_config
 from planning.interface import InterfaceOptions, MotionPlanningInterface
+from planning.io.scene_files import apply_scene_file
 from planning.motion_planner import MotionPlannerOptions
 from planning.planning_scene import PlanningScene
-from planning.scene_io import apply_scene_file
 
 
 def make_planning_scene(config: PandaStationConfig, *, meshcat=None) -> PlanningScene:

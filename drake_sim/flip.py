@@ -15,13 +15,14 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_load_typed
 from pydrake.geometry import StartMeshcat
 
-from drake_sim import cli
-from drake_sim.errors import ConfigError
+from diagrams.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
+from drake_sim.base import cli
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
-from drake_sim.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
-from drake_sim.resources import config_dir
-from drake_sim.robot_params import load_robot_params
-from drake_sim.teleop import BUTTONS
+from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.robots.ddrive_params import load_robot_params
+from drake_sim.systems.viewer.teleop import BUTTONS
 
 HEADLESS_DURATION = 20.0  # s, the default run length without a viewer.
 PROGRESS_MIN_DURATION = 10.0  # s simulated: shorter headless runs show no progress bar.
@@ -29,7 +30,9 @@ PROGRESS_MIN_DURATION = 10.0  # s simulated: shorter headless runs show no progr
 
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.flip", description=__doc__.split("\n")[0])
-    cli.add_robot_and_config_options(parser, config_dir() / "flip.yaml")
+    cli.add_robot_and_config_options(
+        parser, default_robot=default_robot_file(), default_config=config_dir() / "flip.yaml"
+    )
     parser.add_argument(
         "--duration",
         type=cli.positive_float,

@@ -11,9 +11,9 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from tqdm import tqdm
 
 from diagrams.flip import make_flip_diagram
-from drake_sim.flip_controller import STATUS_FIELDS, FlipMode
-from drake_sim.flip_scenario import FlipScenario
-from drake_sim.robot_params import RobotParams
+from diagrams.flip_scenario import FlipScenario
+from drake_sim.robots.ddrive_params import RobotParams
+from drake_sim.systems.control.flip_controller import STATUS_FIELDS, FlipMode
 
 
 @dc.dataclass

@@ -18,12 +18,12 @@ from pydrake.geometry import StartMeshcat
 
 from diagrams.panda_station import MODES, load_station_config
 from diagrams.planning_station import make_planning_station
-from drake_sim import cli
-from drake_sim.errors import ConfigError
-from drake_sim.resources import config_dir
+from drake_sim.base import cli
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 from planning.errors import ErrorCode, PlanningError
 from planning.motion_planner import load_planner_options
-from planning.pick_place import PickPlaceTask, StepReport
+from planning.task.pick_place import PickPlaceTask, StepReport
 
 BUTTON = "Pick"
 

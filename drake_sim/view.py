@@ -14,16 +14,19 @@ import numpy as np
 from pydrake.geometry import StartMeshcat
 
 from diagrams.ddrive_model import make_ddrive_model_diagram
-from drake_sim import cli
+from diagrams.flip_scenario import load_flip_scenario
+from drake_sim.base import cli
+from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
-from drake_sim.flip_scenario import load_flip_scenario
-from drake_sim.resources import config_dir
-from drake_sim.robot_params import load_robot_params
+from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.robots.ddrive_params import load_robot_params
 
 
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.view", description=__doc__.split("\n")[0])
-    cli.add_robot_and_config_options(parser, config_dir() / "view.yaml")
+    cli.add_robot_and_config_options(
+        parser, default_robot=default_robot_file(), default_config=config_dir() / "view.yaml"
+    )
     parser.add_argument(
         "--view-only", action="store_true", help="the robot alone, with joint sliders"
     )

@@ -7,13 +7,13 @@ from the installed ``example-robot-data`` package (``panda_assets``), is built f
 
 from planning.config import IkOptions, PandaPlanningConfig, load_panda_config
 from planning.errors import ErrorCode, PlanningError
-from planning.ik import IkResult
+from planning.io.scene_files import load_moveit_scene, load_scene_yaml, save_scene_yaml
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
-from planning.plan import Plan, PlanResult, describe_scene
+from planning.plan import Plan, PlanResult
 from planning.planning_scene import PlanningScene
 from planning.robot_state import RobotState, RobotStateReader
-from planning.scene_io import load_moveit_scene, load_scene_yaml, save_scene_yaml
-from planning.scene_objects import SceneObject, make_pose
+from planning.scene_objects import SceneObject, describe_scene, make_pose
+from planning.search.ik import IkResult
 
 __all__ = [
     "ErrorCode",

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning._rrt import CheckerAdapter
+from planning.collision.checker import CheckerAdapter
 
 
 def ompl_available() -> bool:

@@ -32,12 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_sim.resources import cache_dir
-from planning import mbm
+from drake_sim.base.resources import cache_dir
 from planning._ompl_baseline import ompl_available, ompl_plan
-from planning._rrt import CheckerAdapter, first_invalid_segment, path_length
+from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import PlanningError
+from planning.io import mbm
 from planning.motion_planner import MotionPlanner, load_planner_options
+from planning.paths import path_length
 from planning.planning_scene import PlanningScene
 
 _FINE = 0.01  # rad

@@ -12,8 +12,8 @@ from pathlib import Path
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 
-from drake_sim.errors import ConfigError
-from drake_sim.resources import config_dir
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 
 
 @dc.dataclass

@@ -29,11 +29,11 @@ import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 
-from planning._commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
-from planning._handles import ActionHandle, ExecutionResult, PlanHandle, submit
 from planning.errors import ErrorCode, PlanningError
+from planning.execution.commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
+from planning.execution.handles import ActionHandle, ExecutionResult, PlanHandle, submit
+from planning.model.panda import ATTACHMENT_BODY
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions
-from planning.panda_model import ATTACHMENT_BODY
 from planning.robot_state import RobotState
 
 FINGER_OPEN = 0.04  # m, each finger fully open

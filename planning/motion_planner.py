@@ -2,14 +2,14 @@
 
 Every request checks its start and goal (limits, finite values, collisions naming the bodies),
 then finds a joint path: the straight line when it is collision-free, else RRT-Connect (batched,
-``planning._rrt_batch``) followed by shortcutting (``planning._rrt``). Collision queries go to
-conservative sphere models of the robot first (``planning._sphere_checker``: what they prove
-free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` for what they
-cannot decide. Every path is re-checked at ``validation_resolution`` (0.01 rad) before it is
-returned, accepting a configuration only when the spheres prove it free or Drake's checker
+``planning.search.rrt_batch``) followed by shortcutting (``planning.search.shortcut``). Collision
+queries go to conservative sphere models of the robot first (``planning.collision.sphere_checker``:
+what they prove free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` for
+what they cannot decide. Every path is re-checked at ``validation_resolution`` (0.01 rad) before it
+is returned, accepting a configuration only when the spheres prove it free or Drake's checker
 finds it free; a segment failing that check is re-planned with edges checked at that
 resolution. The path is then timed within the scaled velocity and acceleration limits
-(``planning._retime``: TOPP-RA, stopping only at sharp corners; rest to rest where the
+(``planning.timing.retime``: TOPP-RA, stopping only at sharp corners; rest to rest where the
 rounded corners would graze an obstacle) into a ``Plan``.
 
 Requests start from the planner's ``RobotState`` (its current q; MoveIt's "current state")
@@ -23,25 +23,23 @@ import time
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
-from planning._cartesian import cartesian_path
-from planning._planner_options import (
+from planning.collision.checker import CheckerAdapter, first_invalid_segment
+from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
+from planning.errors import ErrorCode, PlanningError
+from planning.paths import path_length
+from planning.plan import Plan, PlanResult
+from planning.planner_options import (
     MotionPlannerOptions,
     check_options,
     load_planner_options,
 )
-from planning._retime import RetimeOptions
-from planning._rrt import (
-    CheckerAdapter,
-    first_invalid_segment,
-    path_length,
-    rrt_connect,
-    shortcut,
-)
-from planning._rrt_batch import rrt_connect_batch
-from planning._sphere_checker import SphereCheckerAdapter, sphere_model
-from planning.errors import ErrorCode, PlanningError
-from planning.plan import Plan, PlanResult, describe_scene
 from planning.robot_state import RobotState
+from planning.scene_objects import describe_scene
+from planning.search.cartesian import cartesian_path
+from planning.search.rrt import rrt_connect
+from planning.search.rrt_batch import rrt_connect_batch
+from planning.search.shortcut import shortcut
+from planning.timing.retime import RetimeOptions
 
 
 class MotionPlanner:
@@ -60,24 +58,24 @@ class MotionPlanner:
         self._state = state if state is not None else RobotState(scene)
         if self._options.sphere_checks:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.sphere_slack)
-        self._gcs = None  # a planning._gcs.SceneGcs after use_gcs()
+        self._gcs = None  # a planning.search.gcs.SceneGcs after use_gcs()
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
 
         While the scene is the one the regions were grown in (same cache key), a request whose
-        straight line collides tries GCS (``planning._gcs``) before RRT-Connect; its path is
+        straight line collides tries GCS (``planning.search.gcs``) before RRT-Connect; its path is
         validated like any other. Measured on the pick-and-place scene: GCS takes 0.7 to 1.7 s
         per request against 0.01 to 0.24 s for RRT-Connect, for paths up to 45 % shorter, so
         RRT-Connect stays the default.
 
         Args:
-            regions: a ``planning._regions.RegionSet`` (``load_or_build_regions``).
+            regions: a ``planning.search.iris_regions.RegionSet`` (``load_or_build_regions``).
             region_options: the ``RegionOptions`` they were grown with (defaults when None).
             gcs_options: ``GcsOptions``; the planner's validation step and speed limits when
                 None.
         """
-        from planning._gcs import GcsOptions, SceneGcs
+        from planning.search.gcs import GcsOptions, SceneGcs
 
         opts = self._options
         gcs_options = gcs_options or GcsOptions(
@@ -269,11 +267,11 @@ class MotionPlanner:
 
     # --------------------------------------------------------------------------- search ----
     def _adapter(self, resolution: float | None = None, *, search: bool = False):
-        """Collision queries: sphere models first when enabled (``planning._sphere_checker``).
-        A search adapter leaves Drake out for ``drake_fallback_after`` sphere-checked
-        configurations (what the spheres cannot decide counts as colliding), then asks it
-        too; a validating one always does, so validation accepts exactly what Drake's checker
-        accepts."""
+        """Collision queries: sphere models first when enabled
+        (``planning.collision.sphere_checker``). A search adapter leaves Drake out for
+        ``drake_fallback_after`` sphere-checked configurations (what the spheres cannot decide
+        counts as colliding), then asks it too; a validating one always does, so validation accepts
+        exactly what Drake's checker accepts."""
         opts = self._options
         if not opts.sphere_checks:
             return CheckerAdapter(self._scene, resolution)
@@ -327,7 +325,7 @@ class MotionPlanner:
         )
 
     def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
-        """RRT-Connect, batched (``planning._rrt_batch``) when ``rrt_batch`` > 1."""
+        """RRT-Connect, batched (``planning.search.rrt_batch``) when ``rrt_batch`` > 1."""
         opts = self._options
         step = step or opts.rrt_step
         kwargs = dict(step=step, goal_bias=opts.goal_bias, deadline=deadline, rng=rng)
@@ -336,7 +334,7 @@ class MotionPlanner:
         return rrt_connect(adapter, q_a, q_b, **kwargs)
 
     def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
-        from planning._kto import kto_refine
+        from planning.search.kto import kto_refine
 
         dense = kto_refine(self._scene, path, max_velocity=np.asarray(self._options.max_velocity))
         if dense is None or path_length(dense) >= path_length(path):

@@ -18,10 +18,10 @@ File format (JSON, one object; ``Plan.save`` / ``Plan.load``)::
 
 where an object is ``{"name", "shape", "size", "position", "orientation": [x, y, z, w]}`` as in
 ``scene_objects`` (world objects: pose X_WO; attached ones: X_AO in the hand's attachment frame).
-``timing`` holds ``planning._retime.RetimeOptions``. Version 1 files have no ``timing``: they
+``timing`` holds ``planning.timing.retime.RetimeOptions``. Version 1 files have no ``timing``: they
 load with ``method: rest_to_rest`` (a stop at every waypoint), the timing they were saved with.
 Times are not stored: they follow from the waypoints, limits and timing options
-(``planning._retime``), so a loaded plan samples exactly as the saved one. Floats are written
+(``planning.timing.retime``), so a loaded plan samples exactly as the saved one. Floats are written
 with ``repr`` precision, so a plan loads back equal.
 """
 
@@ -36,37 +36,19 @@ from pathlib import Path
 
 import numpy as np
 
-from planning._retime import RetimeOptions, Timing
-from planning._rrt import CheckerAdapter, first_invalid_segment
+from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
-from planning.panda_model import ARM_JOINTS
+from planning.model.panda import ARM_JOINTS
+from planning.scene_objects import describe_scene
+from planning.timing.retime import RetimeOptions, Timing
 
 _FORMAT = "drake_sim.plan"
 _VERSION = 2
 
 
-def describe_scene(scene) -> dict:
-    """Returns a JSON-ready description of a scene's world and attached objects."""
-
-    def entry(obj) -> dict:
-        quat = obj.X_PO.rotation().ToQuaternion()
-        return {
-            "name": obj.name,
-            "shape": obj.shape,
-            "size": [float(s) for s in obj.size],
-            "position": obj.X_PO.translation().tolist(),
-            "orientation": [quat.x(), quat.y(), quat.z(), quat.w()],
-        }
-
-    return {
-        "world": [entry(o) for o in scene.world_objects.values()],
-        "attached": [entry(o) for o in scene.attached_objects.values()],
-    }
-
-
 @dataclass
 class Plan:
-    """A timed trajectory through joint waypoints (see ``planning._retime``).
+    """A timed trajectory through joint waypoints (see ``planning.timing.retime``).
 
     The trajectory starts and ends at rest exactly at the first and last waypoints, stops at
     sharp corners of the path, and elsewhere stays within ``timing.path_tolerance`` (rad) of the
@@ -81,7 +63,7 @@ class Plan:
         finger_positions: (2,) m, during the motion.
         scene: ``describe_scene`` of the scene it was planned in.
         robot: name and joint names.
-        timing: how the path is timed (``planning._retime.RetimeOptions``).
+        timing: how the path is timed (``planning.timing.retime.RetimeOptions``).
         info: free-form facts (planner, planning time, path length, ...).
     """
 
@@ -171,7 +153,7 @@ class Plan:
                         f"{scene.describe_collisions(where)}",
                     )
                 return
-            from planning._rrt import densify
+            from planning.paths import densify
 
             samples, segment = densify(self.waypoints[bad : bad + 2], resolution)
             where = next(q for q in samples if not scene.is_collision_free(q))
@@ -317,7 +299,7 @@ def _panda_position_limits() -> tuple[np.ndarray, np.ndarray]:
     from pydrake.multibody.parsing import Parser
     from pydrake.multibody.plant import MultibodyPlant
 
-    from planning.panda_assets import panda_urdf
+    from planning.model.assets import panda_urdf
 
     plant = MultibodyPlant(0.0)
     Parser(plant).AddModels(str(panda_urdf()))

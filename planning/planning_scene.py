@@ -24,7 +24,7 @@ from pydrake.planning import SceneGraphCollisionChecker
 
 from planning.config import PandaPlanningConfig, load_panda_config
 from planning.errors import ErrorCode, PlanningError
-from planning.panda_model import (
+from planning.model.panda import (
     ATTACHMENT_BODY,
     PandaModel,
     build_panda_model,
@@ -326,19 +326,19 @@ class PlanningScene:
 
     def load_yaml(self, filename) -> None:
         """Replaces the world objects by those of our scene YAML (``scene_io``)."""
-        from planning.scene_io import load_scene_yaml
+        from planning.io.scene_files import load_scene_yaml
 
         load_scene_yaml(self, filename)
 
     def load_moveit(self, filename) -> None:
         """Replaces the world objects by those of a MoveIt PlanningScene YAML (``scene_io``)."""
-        from planning.scene_io import load_moveit_scene
+        from planning.io.scene_files import load_moveit_scene
 
         load_moveit_scene(self, filename)
 
     def save_yaml(self, filename) -> None:
         """Writes the scene in our YAML (``scene_io``)."""
-        from planning.scene_io import save_scene_yaml
+        from planning.io.scene_files import save_scene_yaml
 
         save_scene_yaml(self, filename)
 

@@ -1,4 +1,5 @@
-"""Precomputes the IRIS regions of a pick-and-place scene into the cache (``planning._regions``).
+"""Precomputes the IRIS regions of a pick-and-place scene into the cache
+(``planning.search.iris_regions``).
 
 Usage::
 
@@ -19,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_sim.cli import ArgumentParser, positive_float, run
-from drake_sim.errors import ConfigError
+from drake_sim.base.cli import ArgumentParser, positive_float, run
+from drake_sim.base.errors import ConfigError
 
 
 def pick_place_seeds(scene, state, height: float) -> list[np.ndarray]:
@@ -61,7 +62,7 @@ def _load_options(args):
     import yaml
     from pydrake.common.yaml import yaml_load_typed
 
-    from planning._regions import RegionOptions, check_region_options
+    from planning.search.iris_regions import RegionOptions, check_region_options
 
     errors = (RuntimeError, ValueError, TypeError, yaml.YAMLError, OSError)
     options = RegionOptions()
@@ -102,7 +103,7 @@ def main(argv=None) -> int:
     options = _load_options(args)
 
     from planning import PlanningError, PlanningScene, RobotState
-    from planning._regions import load_or_build_regions
+    from planning.search.iris_regions import load_or_build_regions
 
     scene = PlanningScene()
     state = RobotState(scene)

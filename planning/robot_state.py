@@ -16,7 +16,7 @@ from pydrake.systems.framework import LeafSystem
 
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
-from planning.ik import IkResult, IkSolver
+from planning.search.ik import IkResult, IkSolver
 
 
 class RobotStateReader(LeafSystem):

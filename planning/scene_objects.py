@@ -121,3 +121,22 @@ def free_body_pose(q: np.ndarray) -> RigidTransform:
 def free_body_positions(X_WB: RigidTransform) -> np.ndarray:
     """The 7 positions [qw, qx, qy, qz, x, y, z] of a free body at X_WB."""
     return np.concatenate([X_WB.rotation().ToQuaternion().wxyz(), X_WB.translation()])
+
+
+def describe_scene(scene) -> dict:
+    """Returns a JSON-ready description of a scene's world and attached objects."""
+
+    def entry(obj) -> dict:
+        quat = obj.X_PO.rotation().ToQuaternion()
+        return {
+            "name": obj.name,
+            "shape": obj.shape,
+            "size": [float(s) for s in obj.size],
+            "position": obj.X_PO.translation().tolist(),
+            "orientation": [quat.x(), quat.y(), quat.z(), quat.w()],
+        }
+
+    return {
+        "world": [entry(o) for o in scene.world_objects.values()],
+        "attached": [entry(o) for o in scene.attached_objects.values()],
+    }

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from drake_sim.browser import find_chromium
-from drake_sim.resources import models_dir
+from drake_sim.base.resources import models_dir
+from drake_sim.tools.browser import find_chromium
 
 # A page expression: the number of meshes in the Meshcat scene.
 COUNT_MESHES = "(() => { let n = 0; viewer.scene.traverse(o => { n += !!o.isMesh; }); return n })()"

@@ -2,7 +2,7 @@
 
 import yaml
 
-from drake_sim.robot import default_robot_file
+from drake_sim.robots.ddrive import default_robot_file
 
 
 def edited_robot_file(tmp_path, edit):

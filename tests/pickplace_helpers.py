@@ -1,12 +1,12 @@
 """Helpers of the pick-and-place tests."""
 
-from planning.scene_generator import random_scene  # noqa: F401 (re-exported for the tests)
+from planning.task.scene_generator import random_scene  # noqa: F401 (re-exported for the tests)
 
 
 def run_task(config, mode: str, *, monitor=None):
     """Builds the station for ``config`` and runs the task; returns (report, interface)."""
     from diagrams.planning_station import make_planning_station
-    from planning.pick_place import PickPlaceTask
+    from planning.task.pick_place import PickPlaceTask
 
     interface = make_planning_station(config, mode=mode)
     if monitor is not None:

@@ -8,10 +8,10 @@ import pytest
 from PIL import Image
 from pydrake.geometry import Meshcat
 
-import drake_sim.browser as mut
+import drake_sim.tools.browser as mut
 from drake_sim import flip
 from drake_sim.flip_run import FlipRun
-from drake_sim.replay_frames import capture_replay
+from drake_sim.tools.replay_frames import capture_replay
 from tests.browser_helpers import (
     COUNT_MESHES,
     assert_not_blank,

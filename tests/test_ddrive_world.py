@@ -9,10 +9,10 @@ from pydrake.systems.analysis import Simulator
 
 import diagrams.ddrive_world as mut
 from diagrams.ddrive_model import make_ddrive_model_diagram
-from drake_sim.flip_scenario import load_flip_scenario
-from drake_sim.resources import config_dir
-from drake_sim.robot import default_robot_file
-from drake_sim.robot_params import load_robot_params
+from diagrams.flip_scenario import load_flip_scenario
+from drake_sim.base.resources import config_dir
+from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.robots.ddrive_params import load_robot_params
 
 
 @pytest.fixture(scope="module")

@@ -1,10 +1,10 @@
-"""The cmd_vel controller (drake_sim.diff_drive_controller)."""
+"""The cmd_vel controller (drake_sim.systems.control.diff_drive_controller)."""
 
 import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-import drake_sim.diff_drive_controller as mut
+import drake_sim.systems.control.diff_drive_controller as mut
 from tests.flip_helpers import default_robot, flip_scenario, run_for
 
 UPRIGHT = np.r_[1.0, 0, 0, 0, np.zeros(6)]

@@ -21,4 +21,4 @@ def test_api_docs_build_without_warnings(tmp_path):
     assert "warn" not in result.stderr.lower(), result.stderr
     for package in PACKAGES:
         assert (tmp_path / f"{package}.html").is_file()
-    assert (tmp_path / "drake_sim" / "flip_controller.html").is_file()
+    assert (tmp_path / "drake_sim" / "systems" / "control" / "flip_controller.html").is_file()

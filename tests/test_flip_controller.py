@@ -5,8 +5,8 @@ import dataclasses as dc
 import numpy as np
 import pytest
 
-import drake_sim.flip_controller as mut
-from drake_sim.flip_controller import FlipMode
+import drake_sim.systems.control.flip_controller as mut
+from drake_sim.systems.control.flip_controller import FlipMode
 from tests.flip_helpers import default_robot, flip_scenario, run_for
 
 MODE, SIGN, FLIPS, FAILED, RECOVERIES, ATTEMPTS = range(6)
@@ -107,7 +107,7 @@ def test_default_scenario_acceptance():
 def test_scaled_robots_still_flip(tmp_path, length, mass):
     """The same controller file drives robots of other sizes (written to YAML and read back,
     as a user would)."""
-    from drake_sim.robot_params import load_robot_params, write_robot_params
+    from drake_sim.robots.ddrive_params import load_robot_params, write_robot_params
 
     path = tmp_path / "robot.yaml"
     write_robot_params(default_robot().scaled(length=length, mass=mass), path)

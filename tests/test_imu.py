@@ -1,4 +1,4 @@
-"""The simulated IMU (drake_sim.imu)."""
+"""The simulated IMU (drake_sim.systems.sensors.imu)."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from pydrake.multibody.tree import SpatialInertia, UnitInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-import drake_sim.imu as mut
+import drake_sim.systems.sensors.imu as mut
 from tests.flip_helpers import flip_scenario, run_for
 
 

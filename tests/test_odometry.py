@@ -1,4 +1,4 @@
-"""Flip-aware odometry and its ground truth (drake_sim.odometry)."""
+"""Flip-aware odometry and its ground truth (drake_sim.systems.estimation.odometry)."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from pydrake.math import RollPitchYaw, RotationMatrix
 
-import drake_sim.odometry as mut
+import drake_sim.systems.estimation.odometry as mut
 from tests.flip_helpers import default_robot, run_for
 
 G_UP = np.array([0.0, 0.0, 9.81])

@@ -11,8 +11,8 @@ from pydrake.systems.primitives import TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
 import diagrams.panda_station as mut
-from drake_sim.errors import ConfigError
-from planning.panda_model import build_panda_model
+from drake_sim.base.errors import ConfigError
+from planning.model.panda import build_panda_model
 from planning.scene_objects import free_body_pose, free_body_positions
 
 

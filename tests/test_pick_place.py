@@ -5,10 +5,10 @@ import dataclasses as dc
 import numpy as np
 import pytest
 
-import planning.pick_place as mut
+import planning.task.pick_place as mut
 from diagrams.panda_station import load_station_config
-from planning._task_geometry import boxes_overlap
-from planning.scene_io import BoxSpec
+from planning.io.scene_files import BoxSpec
+from planning.task.geometry import boxes_overlap
 from tests.pickplace_helpers import random_scene, run_task
 
 STEPS = list(mut.STEPS)
@@ -25,7 +25,7 @@ class ObstacleWatch:
     def __init__(self, config):
         self.size = config.scene.object.size
         obstacle = config.scene.obstacle
-        from diagrams._panda_station_systems import box_pose
+        from diagrams.panda_station_systems import box_pose
 
         self.obstacle = (obstacle.size, box_pose(obstacle))
         self.overlaps, self.lowest = 0, np.inf

@@ -13,7 +13,7 @@ import time
 import pytest
 from PIL import Image
 
-from drake_sim.browser import HeadlessBrowser
+from drake_sim.tools.browser import HeadlessBrowser
 from tests.browser_helpers import COUNT_MESHES, assert_not_blank, require_chromium
 
 CLICK_PICK = """(() => {

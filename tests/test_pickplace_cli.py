@@ -7,8 +7,8 @@ import sys
 import pytest
 import yaml
 
-from drake_sim.resources import config_dir
-from planning.pick_place import STEPS
+from drake_sim.base.resources import config_dir
+from planning.task.pick_place import STEPS
 from tests.cli_helpers import assert_bad_input
 
 REPORT_KEYS = {

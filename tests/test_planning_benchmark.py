@@ -54,7 +54,7 @@ def test_one_problem_report(tmp_path, capsys):
     folder = mut.problems_folder(DATASET)
     scene = PlanningScene()
     scene.load_moveit(folder / "box_panda/scene0001.yaml")
-    from planning import mbm
+    from planning.io import mbm
 
     request = mbm.load_request(folder / "box_panda/request0001.yaml")
     scene.finger_positions = request.q_start[7:]

@@ -10,10 +10,10 @@ import pytest
 from pydrake.geometry.optimization import HPolyhedron
 from pydrake.math import RigidTransform, RotationMatrix
 
-import planning._gcs as mut
-import planning._regions as regions_mut
+import planning.search.gcs as mut
+import planning.search.iris_regions as regions_mut
 from planning import PlanningScene, RobotState
-from planning.scene_io import load_scene_yaml
+from planning.io.scene_files import load_scene_yaml
 from tests.cli_helpers import assert_bad_input
 
 R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # hand z axis pointing down

@@ -8,8 +8,8 @@ import pytest
 import yaml
 
 import planning as mut
-from drake_sim.resources import cache_dir
-from planning import mbm
+from drake_sim.base.resources import cache_dir
+from planning.io import mbm
 
 DATASET = Path(__file__).resolve().parent.parent.parent / "shared" / "benchmarks" / "mbm_panda"
 

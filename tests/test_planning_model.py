@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from drake_sim.errors import ConfigError
-from drake_sim.resources import cache_dir
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import cache_dir
 from planning import config as config_mod
-from planning import panda_assets
-from planning import panda_model as mut
+from planning.model import assets as panda_assets
+from planning.model import panda as mut
 
 
 @pytest.fixture(scope="module")
@@ -150,7 +150,7 @@ def test_add_table_has_its_top_at_zero():
     from pydrake.systems.framework import DiagramBuilder
 
     from planning.config import load_panda_config
-    from planning.panda_model import add_table
+    from planning.model.panda import add_table
 
     table = load_panda_config().table
     builder = DiagramBuilder()

@@ -95,7 +95,7 @@ def test_over_the_obstacle_needs_a_search_and_stays_free(dut, scene):
 
 
 def test_one_extension_per_query_also_finds_a_free_path(dut, scene):
-    """rrt_batch 1: the classic RRT-Connect (planning._rrt.rrt_connect) instead of batches."""
+    """rrt_batch 1: the classic RRT-Connect (planning.search.rrt.rrt_connect) instead of batches."""
     q_a = dut.plan_to_pose(above(OBJECT, 0.06)).trajectory.waypoints[-1]
     q_b = dut.plan_to_pose(above(PLACE, 0.06), q_start=q_a).trajectory.waypoints[-1]
     planner = mut.MotionPlanner(scene, mut.MotionPlannerOptions(rrt_batch=1))

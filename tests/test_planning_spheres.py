@@ -1,6 +1,6 @@
-"""Sphere models of the Panda (planning._spheres and friends): batched kinematics equal Drake's,
-the spheres cover every collision mesh, their verdicts agree with Drake's checker in MBM and
-pick-and-place scenes, and scene changes made at run time are seen."""
+"""Sphere models of the Panda (planning.collision.spheres and friends): batched kinematics equal
+Drake's, the spheres cover every collision mesh, their verdicts agree with Drake's checker in MBM
+and pick-and-place scenes, and scene changes made at run time are seen."""
 
 from pathlib import Path
 
@@ -9,13 +9,13 @@ import pytest
 from pydrake.math import RigidTransform
 from pydrake.multibody.tree import BodyIndex
 
-import planning._spheres as mut
-from drake_sim.resources import config_dir
+import planning.collision.spheres as mut
+from drake_sim.base.resources import config_dir
 from planning import PlanningScene
-from planning._rrt import CheckerAdapter
-from planning._sphere_checker import SphereCheckerAdapter, sphere_model
-from planning._sphere_cover import box_polytope, cover_polytope, cylinder_polytope
-from planning._sphere_robot import shape_polytope
+from planning.collision.checker import CheckerAdapter
+from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
+from planning.collision.sphere_cover import box_polytope, cover_polytope, cylinder_polytope
+from planning.collision.sphere_robot import shape_polytope
 
 DATASET = Path(__file__).resolve().parents[2] / "shared/benchmarks/mbm_panda"
 needs_dataset = pytest.mark.skipif(
@@ -125,8 +125,8 @@ def check_agreement(scene, qs):
 
 @needs_dataset
 def test_agrees_with_drake_in_mbm_scenes(scene, dut):
-    from planning import mbm
     from planning.benchmark import problems_folder
+    from planning.io import mbm
 
     folder = problems_folder(DATASET)
     for family in ("cage_panda", "bookshelf_thin_panda"):

@@ -1,11 +1,12 @@
-"""``python -m drake_sim.readme_pictures``: diagrams, the GIF hook and the missing-tool errors."""
+"""``python -m drake_sim.tools.readme_pictures``: diagrams, the GIF hook and the missing-tool
+errors."""
 
 import shutil
 
 import pytest
 
-import drake_sim.readme_pictures as mut
-from drake_sim.errors import ConfigError
+import drake_sim.tools.readme_pictures as mut
+from drake_sim.base.errors import ConfigError
 from tests.browser_helpers import require_chromium
 
 SMALL_DOT = "digraph { a -> b }"

@@ -1,4 +1,4 @@
-"""``python -m drake_sim.replay_frames``: frame times, the GIF, the camera and the CLI."""
+"""``python -m drake_sim.tools.replay_frames``: frame times, the GIF, the camera and the CLI."""
 
 import os
 import subprocess
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image, ImageSequence
 
-import drake_sim.replay_frames as mut
+import drake_sim.tools.replay_frames as mut
 from drake_sim import flip
 from tests.browser_helpers import require_chromium, robot_pixels
 from tests.cli_helpers import assert_bad_input
@@ -16,7 +16,7 @@ from tests.cli_helpers import assert_bad_input
 
 def _run(*args, env=None):
     return subprocess.run(
-        [sys.executable, "-m", "drake_sim.replay_frames", *map(str, args)],
+        [sys.executable, "-m", "drake_sim.tools.replay_frames", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=300,

@@ -1,4 +1,4 @@
-"""The robot's xacro and the model Drake builds from it (drake_sim.robot, models/ddrive)."""
+"""The robot's xacro and the model Drake builds from it (drake_sim.robots.ddrive, models/ddrive)."""
 
 import numpy as np
 import pytest
@@ -7,8 +7,8 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
-import drake_sim.robot as mut
-from drake_sim.robot_params import load_robot_params
+import drake_sim.robots.ddrive as mut
+from drake_sim.robots.ddrive_params import load_robot_params
 
 LINKS = ("base_link", "left_wheel", "right_wheel", "bottom_caster", "top_caster")
 

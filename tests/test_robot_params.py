@@ -1,13 +1,13 @@
-"""Loading and validating the robot YAML (drake_sim.robot_params)."""
+"""Loading and validating the robot YAML (drake_sim.robots.ddrive_params)."""
 
 import math
 
 import pytest
 import yaml
 
-import drake_sim.robot_params as mut
-from drake_sim.errors import ConfigError
-from drake_sim.robot import default_robot_file
+import drake_sim.robots.ddrive_params as mut
+from drake_sim.base.errors import ConfigError
+from drake_sim.robots.ddrive import default_robot_file
 
 
 def _write(tmp_path, data, name="robot.yaml"):

@@ -1,4 +1,5 @@
-"""Keyboard teleop in Meshcat (drake_sim.teleop), driving the robot through cmd_vel."""
+"""Keyboard teleop in Meshcat (drake_sim.systems.viewer.teleop), driving the robot through
+cmd_vel."""
 
 import msgpack
 import numpy as np
@@ -6,7 +7,7 @@ import pytest
 from pydrake.geometry import StartMeshcat
 from pydrake.systems.analysis import Simulator
 
-import drake_sim.teleop as mut
+import drake_sim.systems.viewer.teleop as mut
 from drake_sim.flip_run import FlipRun
 from tests.flip_helpers import default_robot, flip_scenario
 

@@ -1,10 +1,10 @@
-"""The odometry display (drake_sim.trails)."""
+"""The odometry display (drake_sim.systems.viewer.trails)."""
 
 import numpy as np
 from pydrake.geometry import StartMeshcat
 from pydrake.systems.analysis import Simulator
 
-import drake_sim.trails as mut
+import drake_sim.systems.viewer.trails as mut
 
 
 def test_trails_are_drawn_and_bounded():

@@ -1,10 +1,10 @@
-"""The flip controller's wheel drivers (drake_sim.wheel_drivers)."""
+"""The flip controller's wheel drivers (drake_sim.systems.control.wheel_drivers)."""
 
 import numpy as np
 import pytest
 
-import drake_sim.wheel_drivers as mut
-from drake_sim.diff_drive_controller import wheel_loop_gain
+import drake_sim.systems.control.wheel_drivers as mut
+from drake_sim.systems.control.diff_drive_controller import wheel_loop_gain
 from tests.flip_helpers import default_robot
 
 

@@ -13,9 +13,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from diagrams.ddrive_world import add_ground
-from drake_sim import generate_models as mut
-from drake_sim.resources import make_parser, models_dir, package_uri
-from drake_sim.scenario import GroundConfig
+from diagrams.world_scenario import GroundConfig
+from drake_sim.base.resources import make_parser, models_dir, package_uri
+from drake_sim.tools import generate_models as mut
 
 WORLD_URL = package_uri("worlds/ddrive.world.sdf")
 # The robot's corridor above the street surface (world frame, m); the ground's top is z = 0.
@@ -114,7 +114,7 @@ def test_barrier_inertia_is_concrete(world):
 def test_generated_files_are_up_to_date(tmp_path):
     assert mut.differences(mut.generate(models_dir())) == []
     result = subprocess.run(
-        [sys.executable, "-m", "drake_sim.generate_models", "--check"],
+        [sys.executable, "-m", "drake_sim.tools.generate_models", "--check"],
         capture_output=True,
         text=True,
         check=False,

@@ -1,0 +1,54 @@
+"""The diff-drive robot model: render the xacro for a robot YAML and add it to a plant."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import yaml
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+
+from drake_sim.base.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
+from drake_sim.robots.ddrive_params import RobotParams
+
+ROBOT_XACRO = "ddrive/ddrive.urdf.xacro"
+"""The robot's xacro, relative to ``models/``."""
+
+LEFT_WHEEL_JOINT = "left_wheel_joint"
+RIGHT_WHEEL_JOINT = "right_wheel_joint"
+BODY_LINK = "base_link"
+
+
+def default_robot_file() -> Path:
+    """Returns ``config/ddrive.yaml``."""
+    return config_dir() / "ddrive.yaml"
+
+
+def robot_urdf(params: RobotParams) -> Path:
+    """Renders the robot's URDF for ``params`` (cached) and returns its path.
+
+    The parameters, with every optional key filled in, are written as YAML beside the cache
+    and handed to the xacro, which reads them with ``xacro.load_yaml``.
+    """
+    text = yaml.safe_dump(params.to_dict(), sort_keys=True)
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    yaml_dir = cache_dir() / "robot_yaml"
+    yaml_dir.mkdir(parents=True, exist_ok=True)
+    resolved = yaml_dir / f"ddrive-{digest}.yaml"
+    if not resolved.is_file():
+        resolved.write_text(text)
+    return render_xacro(models_dir() / ROBOT_XACRO, {"robot_config": str(resolved)})
+
+
+def add_robot(
+    plant: MultibodyPlant, params: RobotParams, *, name: str = "ddrive"
+) -> ModelInstanceIndex:
+    """Adds the robot to ``plant`` as a free body (not welded) and returns its model instance."""
+    parser = make_parser(plant)
+    parser.SetAutoRenaming(False)
+    urdf = robot_urdf(params).read_text()
+    (instance,) = parser.AddModelsFromString(
+        urdf.replace('<robot name="ddrive"', f'<robot name="{name}"', 1), "urdf"
+    )
+    return instance

@@ -1,0 +1,185 @@
+"""The diff-drive robot's dimensions: a typed schema for ``config/ddrive.yaml`` and its checks.
+
+The xacro (``models/ddrive/ddrive.urdf.xacro``) reads the YAML itself through
+``xacro.load_yaml``; this module validates a user's file first, so a bad value is reported as
+one clear ``ConfigError`` instead of a broken model or a NaN simulation, and fills optional keys
+with their defaults before the xacro sees them.
+"""
+
+import dataclasses as dc
+import math
+from pathlib import Path
+
+import yaml
+from pydrake.common.yaml import yaml_load_typed
+
+from drake_sim.base.errors import ConfigError
+
+
+@dc.dataclass
+class BodyParams:
+    length: float = math.nan  # m, along x (towards the wheels).
+    width: float = math.nan  # m, along y.
+    height: float = math.nan  # m, along z.
+    mass: float = math.nan  # kg.
+
+
+@dc.dataclass
+class WheelParams:
+    radius: float = math.nan  # m.
+    width: float = math.nan  # m.
+    mass: float = math.nan  # kg, each wheel.
+    gap: float = 0.01  # m, clearance between the body's side and the wheel.
+
+
+@dc.dataclass
+class CasterParams:
+    radius: float = math.nan  # m, each ball caster.
+    mass: float = 0.05  # kg, each caster.
+
+
+@dc.dataclass
+class MotorParams:
+    max_torque: float = math.nan  # N m, per wheel.
+
+
+@dc.dataclass
+class RobotParams:
+    """Dimensions and masses of the flipping diff-drive robot (SI units)."""
+
+    body: BodyParams = dc.field(default_factory=BodyParams)
+    wheel: WheelParams = dc.field(default_factory=WheelParams)
+    caster: CasterParams = dc.field(default_factory=CasterParams)
+    motor: MotorParams = dc.field(default_factory=MotorParams)
+
+    # Derived geometry, in the body frame B (origin at the body's centre, x forward, z up).
+    @property
+    def axle_x(self) -> float:
+        """x of the wheel axle in B: half a body height behind the front face (m)."""
+        return 0.5 * self.body.length - 0.5 * self.body.height
+
+    @property
+    def wheel_separation(self) -> float:
+        """Distance between the two wheels' mid-planes (m)."""
+        return self.body.width + 2 * self.wheel.gap + self.wheel.width
+
+    @property
+    def caster_x(self) -> float:
+        """x of the casters' centres in B (m)."""
+        return -0.5 * self.body.length + self.caster.radius
+
+    @property
+    def caster_z(self) -> float:
+        """|z| of the casters' centres in B: the body stands level on wheels and caster (m)."""
+        return self.wheel.radius - self.caster.radius
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of the whole robot (kg)."""
+        return self.body.mass + 2 * self.wheel.mass + 2 * self.caster.mass
+
+    def scaled(self, *, length: float = 1.0, mass: float = 1.0) -> "RobotParams":
+        """Returns a copy with every length multiplied by ``length`` and every mass by ``mass``
+        (torque is left alone: the motors are the same)."""
+        b, w, c = self.body, self.wheel, self.caster
+        return RobotParams(
+            body=BodyParams(b.length * length, b.width * length, b.height * length, b.mass * mass),
+            wheel=WheelParams(w.radius * length, w.width * length, w.mass * mass, w.gap * length),
+            caster=CasterParams(c.radius * length, c.mass * mass),
+            motor=dc.replace(self.motor),
+        )
+
+    def to_dict(self) -> dict:
+        """Returns the parameters as plain nested dicts (the YAML layout)."""
+        return dc.asdict(self)
+
+
+_REQUIRED = {
+    "body": ("length", "width", "height", "mass"),
+    "wheel": ("radius", "width", "mass"),
+    "caster": ("radius",),
+    "motor": ("max_torque",),
+}
+
+
+def _check_required(raw, filename: str) -> None:
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{filename}: expected a mapping with keys {sorted(_REQUIRED)}")
+    for section, keys in _REQUIRED.items():
+        block = raw.get(section)
+        if not isinstance(block, dict):
+            raise ConfigError(f"{filename}: missing section '{section}' (keys {list(keys)})")
+        for key in keys:
+            if key not in block:
+                raise ConfigError(f"{filename}: missing key '{section}.{key}'")
+        for key, value in block.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(f"{filename}: '{section}.{key}' must be a number, got {value!r}")
+
+
+def validate(params: RobotParams, filename: str = "robot") -> RobotParams:
+    """Checks every value is a finite positive number and the geometry makes sense.
+
+    Raises:
+        ConfigError: naming the first bad key.
+    """
+    for section in dc.fields(params):
+        block = getattr(params, section.name)
+        for field in dc.fields(block):
+            value = getattr(block, field.name)
+            key = f"{section.name}.{field.name}"
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(f"{filename}: '{key}' must be a number, got {value!r}")
+            if not math.isfinite(value) or value <= 0:
+                raise ConfigError(f"{filename}: '{key}' must be finite and > 0, got {value!r}")
+    b, w, c = params.body, params.wheel, params.caster
+    corner = math.hypot(b.length / 2 - params.axle_x, b.height / 2)  # axle to front corner
+    if w.radius <= corner:
+        raise ConfigError(
+            f"{filename}: 'wheel.radius' ({w.radius}) must exceed {corner:.4g} "
+            "(the body's front corners must clear the ground when it flips over the axle)"
+        )
+    if params.caster_z - c.radius < 0.5 * b.height:
+        raise ConfigError(
+            f"{filename}: 'caster.radius' ({c.radius}) is too large: the casters must fit "
+            f"between the body (half-height {0.5 * b.height}) and the ground "
+            f"(at most {0.5 * (w.radius - 0.5 * b.height):.4g} m)"
+        )
+    if 2 * c.radius > b.width or 2 * c.radius > b.length:
+        raise ConfigError(f"{filename}: 'caster.radius' ({c.radius}) is larger than the body")
+    return params
+
+
+def load_robot_params(filename: str | Path) -> RobotParams:
+    """Loads and validates a robot YAML file (see ``config/ddrive.yaml``).
+
+    Raises:
+        ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
+            that is not a finite positive number or gives an impossible robot.
+    """
+    path = Path(filename)
+    name = str(filename)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise ConfigError(f"{name}: cannot read robot file ({e.strerror})") from None
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise ConfigError(f"{name}: malformed YAML ({first})") from None
+    _check_required(raw, name)
+    try:
+        params = yaml_load_typed(schema=RobotParams, data=text)
+    except (RuntimeError, TypeError, ValueError) as e:
+        raise ConfigError(f"{name}: {_first_line(e)}") from None
+    return validate(params, name)
+
+
+def _first_line(error: Exception) -> str:
+    return str(error).strip().splitlines()[0]
+
+
+def write_robot_params(params: RobotParams, filename: str | Path) -> None:
+    """Writes ``params`` as a complete robot YAML file."""
+    Path(filename).write_text(yaml.safe_dump(params.to_dict(), sort_keys=False))

@@ -1,0 +1,1 @@
+"""Controllers: LeafSystems that turn commands and measurements into actuation."""

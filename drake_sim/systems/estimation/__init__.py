@@ -1,0 +1,1 @@
+"""State estimation: LeafSystems that estimate the robot's pose from its sensors."""

@@ -1,0 +1,1 @@
+"""LeafSystems that talk to Meshcat: keyboard teleop and trails drawn behind the robot."""

@@ -1,0 +1,142 @@
+"""``SphereCheckerAdapter``: the ``CheckerAdapter`` interface answered by sphere models first.
+
+Each configuration is classified by ``_spheres.SphereCollisionModel``: FREE (the conservative
+outer spheres touch nothing, so Drake's checker agrees) and COLLIDING (inner balls overlap, so
+Drake's checker agrees) are final; only UNKNOWN configurations go to the scene's
+``SceneGraphCollisionChecker``. So a configuration is accepted exactly when the sphere model
+proves it free or Drake finds it free: nothing Drake rejects is ever accepted, and narrow
+passages where the outer spheres are too fat still pass through Drake. When the scene holds
+geometry without a sphere model, every query goes to Drake.
+
+Edges are sampled at the edge step (the checker's, or ``resolution``) and classified from
+their start up to the first certain collision, in compiled code; the UNKNOWN samples then go
+to Drake in that order, stopping at the first collision. ``free_prefixes`` checks many
+segments in one call (the batched RRT-Connect and the shortcutting use it).
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from planning.collision.checker import CheckerAdapter, edge_key
+from planning.collision.spheres import FREE, UNKNOWN, SphereCollisionModel
+
+_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_SERIAL = 64  # at most this many configurations go to Drake one by one, more in parallel
+
+
+def sphere_model(scene, slack: float = 0.015) -> SphereCollisionModel:
+    """Returns the scene's sphere model (built once per scene and slack, then kept in sync)."""
+    models = _MODELS.setdefault(scene, {})
+    if slack not in models:
+        models[slack] = SphereCollisionModel(scene, slack)
+    return models[slack]
+
+
+class SphereCheckerAdapter(CheckerAdapter):
+    """7-joint collision queries on a ``PlanningScene``: sphere models, Drake when unsure.
+
+    Args:
+        scene: the planning scene.
+        resolution: as for ``CheckerAdapter``: the edge step, rad (the checker's when None).
+        slack: the sphere cover's slack, m.
+        fallback_after: how many configurations the spheres classify before Drake decides
+            those they cannot; until then these count as colliding (conservative): a fast
+            search first, Drake for narrow passages later. None: Drake decides them always.
+
+    Attributes:
+        counts: how many configurations were decided by spheres and how many went to Drake.
+    """
+
+    def __init__(
+        self,
+        scene,
+        resolution: float | None = None,
+        *,
+        slack: float = 0.015,
+        fallback_after: int | None = None,
+    ):
+        super().__init__(scene, resolution)
+        self._model = sphere_model(scene, slack)
+        self._model.sync()
+        self._fallback_after = fallback_after
+        self.counts = {"spheres": 0, "drake": 0}
+
+    def _fallback(self) -> bool:
+        """True when UNKNOWN configurations go to Drake; before ``fallback_after`` sphere
+        classifications they count as colliding, which is conservative."""
+        return self._fallback_after is None or self.counts["spheres"] >= self._fallback_after
+
+    @property
+    def model(self) -> SphereCollisionModel:
+        return self._model
+
+    def config_free(self, q) -> bool:
+        return bool(self.configs_free(np.asarray(q, dtype=float)[None, :])[0])
+
+    def configs_free(self, qs) -> np.ndarray:
+        """Checks many configurations (rows of qs); returns a bool array."""
+        qs = np.atleast_2d(np.asarray(qs, dtype=float))
+        state = self._model.classify(qs)
+        free = state == FREE
+        unknown = np.flatnonzero(state == UNKNOWN)
+        self.counts["spheres"] += len(qs) - len(unknown)
+        if len(unknown) and self._fallback():
+            self.counts["drake"] += len(unknown)
+            free[unknown] = self._drake_free(qs[unknown])
+        return free
+
+    def _drake_free(self, qs: np.ndarray) -> np.ndarray:
+        if len(qs) <= _SERIAL:  # the parallel call costs more for a few configurations
+            return np.array([self._checker.CheckConfigCollisionFree(self.full(q)) for q in qs])
+        return super().configs_free(qs)
+
+    def free_prefix(self, q_a, q_b) -> float:
+        """As ``CheckerAdapter.free_prefix`` (see ``free_prefixes``)."""
+        return float(self.free_prefixes(q_a[None, :], q_b[None, :])[0])
+
+    def free_prefixes(self, q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+        """``free_prefix`` of many segments (rows of q_a, q_b), (K,): each segment's samples
+        are classified from its start up to its first certain collision (or first uncertain
+        sample before the Drake fallback); the uncertain ones before that then go to Drake
+        together."""
+        step = self._resolution or self._checker.edge_step_size()
+        fallback = self._fallback()
+        end, n, edge, local = self._model.prefixes(q_a, q_b, step, stop_at_unknown=not fallback)
+        self.counts["spheres"] += int(np.minimum(end + 1, n).sum()) - len(edge)
+        if fallback and len(edge):
+            self.counts["drake"] += len(edge)
+            samples = q_a[edge] + ((local + 1) / n[edge])[:, None] * (q_b[edge] - q_a[edge])
+            blocked = ~self._drake_free(samples)
+            np.minimum.at(end, edge[blocked], local[blocked])
+        return np.where(end > 0, end / n, 0.0)
+
+    def edge_free(self, q_a, q_b) -> bool:
+        """True when every sample of the segment at the edge step, q_a included, is
+        collision-free: q_a, then the samples from q_a up to the first certain collision,
+        then the uncertain ones to Drake in growing chunks (sphere checks cost microseconds,
+        so their order hardly matters)."""
+        if self._resolution is not None and self.is_proven(q_a, q_b):
+            return True
+        step = self._resolution or self._checker.edge_step_size()
+        fallback = self._fallback()
+        starts = np.vstack([q_a, q_a]).astype(float)  # q_a alone (one sample), then the edge
+        ends = np.vstack([q_a, q_b]).astype(float)
+        end, n, edge, local = self._model.prefixes(starts, ends, step, stop_at_unknown=not fallback)
+        self.counts["spheres"] += int(np.minimum(end + 1, n).sum()) - len(local)
+        if np.any(end < n):
+            return False
+        t = (local + 1) / n[edge]
+        unknown = starts[edge] + t[:, None] * (ends[edge] - starts[edge])
+        chunk = 4
+        for start in range(0, len(unknown), chunk):
+            piece = unknown[start : start + chunk]
+            self.counts["drake"] += len(piece)
+            if not self._drake_free(piece).all():
+                return False
+            chunk *= 2
+        if self._resolution is not None:
+            self._proven.add(edge_key(q_a, q_b))
+        return True

@@ -1,0 +1,129 @@
+"""Sphere models of a robot's collision geometry and of held objects, cached on disk.
+
+``robot_spheres`` covers every collision geometry of the given bodies (``_sphere_cover``) and
+returns the spheres in each body's frame. Drake checks a ``Convex`` or ``Mesh`` as the convex
+hull of its vertices, so that hull (``Shape.GetConvexHull``) is what is covered; boxes are
+covered as polytopes, cylinders through a circumscribed prism, spheres are kept as they are.
+Covers are written to ``cache_dir()/spheres/<hash>.npz``, the hash taken over the covered
+polytopes, their poses and the cover parameters, so a changed mesh or option regenerates them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+
+import numpy as np
+from pydrake.geometry import Box, Convex, Cylinder, Mesh, Sphere
+from pydrake.multibody.tree import BodyIndex
+
+from drake_sim.base.resources import cache_dir
+from planning.collision.sphere_cover import (
+    SphereSet,
+    box_polytope,
+    cover_polytope,
+    cylinder_polytope,
+)
+
+_VERSION = "2"  # bump when the cover algorithm changes its output
+SPACING = 0.01  # m, grid of candidate centres and coarse samples
+DENSE_SPACING = 0.002  # m, boundary grid that sets the final radii (eps <= 1.2 mm)
+_CELLS = 15  # grid cells along the largest extent of a held object, at most
+
+
+def shape_polytope(shape):
+    """Returns (vertices, polygons, exact_sphere_radius, has_inner) describing a Drake shape:
+    a polytope that contains it, or a sphere radius for a ``Sphere``.
+
+    Raises:
+        NotImplementedError: for shapes other than Convex, Mesh, Box, Cylinder, Sphere.
+    """
+    if isinstance(shape, Sphere):
+        return None, None, shape.radius(), True
+    if isinstance(shape, Box):
+        v, f = box_polytope(shape.size())
+        return v, f, None, True
+    if isinstance(shape, Cylinder):
+        v, f = cylinder_polytope(shape.radius(), shape.length())
+        return v, f, None, False  # the prism's inner balls may leave the cylinder
+    if isinstance(shape, Convex | Mesh):
+        hull = shape.GetConvexHull()
+        v = np.array([hull.vertex(i) for i in range(hull.num_vertices())])
+        data, polygons, k = hull.face_data(), [], 0
+        while k < len(data):
+            polygons.append(list(data[k + 1 : k + 1 + data[k]]))
+            k += data[k] + 1
+        return v, polygons, None, True
+    raise NotImplementedError(f"no sphere cover for {type(shape).__name__}")
+
+
+def cover_shape(shape, X_BG, slack: float, *, scaled: bool = False) -> SphereSet:
+    """Covers a Drake shape posed at X_BG (a RigidTransform) by spheres in frame B.
+
+    Args:
+        scaled: grids scale with the shape (at least ``SPACING``, at most ``_CELLS`` cells
+            along its largest extent), so that large held objects stay cheap to cover.
+    """
+    v, polygons, sphere_radius, has_inner = shape_polytope(shape)
+    if sphere_radius is not None:
+        cover = SphereSet(np.zeros((1, 3)), np.array([sphere_radius]), np.array([sphere_radius]))
+    else:
+        spacing, dense = SPACING, DENSE_SPACING
+        if scaled:
+            spacing = max(SPACING, float(np.ptp(v, axis=0).max()) / _CELLS)
+            dense = spacing * DENSE_SPACING / SPACING
+        cover = cover_polytope(v, polygons, slack=slack, spacing=spacing, dense_spacing=dense)
+        if not has_inner:
+            cover.inner[:] = 0.0
+    return cover.transformed(X_BG.rotation().matrix(), X_BG.translation())
+
+
+def robot_spheres(plant, inspector, bodies, slack: float) -> dict[int, SphereSet]:
+    """Covers the collision geometry of each body (body index -> spheres in its frame),
+    reading the cache or writing it.
+
+    Args:
+        plant: the MultibodyPlant.
+        inspector: a SceneGraphInspector of its SceneGraph (collision geometries' shapes, poses).
+        bodies: body indices to cover.
+        slack: see ``cover_polytope``, m.
+
+    Raises:
+        NotImplementedError: a geometry has a shape without a cover.
+    """
+    items = []  # (body, shape, X_BG)
+    digest = hashlib.sha256(f"{_VERSION} {slack} {SPACING} {DENSE_SPACING}".encode())
+    for body in bodies:
+        for g in plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(body))):
+            shape, X_BG = inspector.GetShape(g), inspector.GetPoseInFrame(g)
+            v, _, radius, _ = shape_polytope(shape)
+            digest.update(f"{int(body)} {type(shape).__name__} {radius}".encode())
+            digest.update(np.ascontiguousarray(X_BG.GetAsMatrix34()).tobytes())
+            if v is not None:
+                digest.update(np.ascontiguousarray(v).tobytes())
+            items.append((int(body), shape, X_BG))
+    path = cache_dir() / "spheres" / f"{digest.hexdigest()[:16]}.npz"
+    if path.is_file():
+        data = np.load(path)
+        owner = data["body"]
+        return {
+            int(b): SphereSet(
+                data["p"][owner == b], data["r"][owner == b], data["inner"][owner == b]
+            )
+            for b in np.unique(owner)
+        }
+    covers: dict[int, list[SphereSet]] = {}
+    for body, shape, X_BG in items:
+        covers.setdefault(body, []).append(cover_shape(shape, X_BG, slack))
+    out = {b: SphereSet.concat(sets) for b, sets in covers.items()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}.npz")
+    np.savez(
+        tmp,
+        body=np.concatenate([np.full(len(s.radius), b) for b, s in out.items()]).astype(int),
+        p=np.vstack([s.p_BS for s in out.values()]),
+        r=np.concatenate([s.radius for s in out.values()]),
+        inner=np.concatenate([s.inner for s in out.values()]),
+    )
+    tmp.replace(path)
+    return out

@@ -1,0 +1,351 @@
+"""Fast collision checks of many Panda configurations with sphere models.
+
+The robot's collision geometry (arm links, hand, fingers at the scene's finger positions, and
+held objects) is covered by spheres (``_sphere_robot``); world objects stay exact boxes,
+cylinders and spheres. ``SphereCollisionModel.classify`` runs forward kinematics for each
+configuration, then exact point-to-primitive distances (and sphere pair distances for
+self-collision), in compiled loops (``_sphere_kernel``), and sorts each configuration into:
+
+- ``FREE``: no outer sphere is within its pair's padding of anything. The outer spheres
+  contain the robot's geometry, so Drake's checker finds it collision-free too.
+- ``COLLIDING``: two inner balls (each inside the geometry) overlap by more than the pair's
+  padding allows, so Drake's checker finds a collision too.
+- ``UNKNOWN``: neither; ask Drake.
+
+Which pairs are checked and their paddings are read from the scene's checker: a body pair is
+checked when neither the checker's filtered collision matrix (the SRDF's disabled pairs, the
+welded base, held-object filters, ``allow_collision``) nor its SceneGraph model filters it, so
+they follow the model. Paddings below zero (a held object may touch the world) only loosen the
+inner test; the outer test uses at least zero.
+
+Costs: each body's spheres are cut into groups of up to ``_GROUP`` neighbours with a bounding
+sphere; only groups (and group pairs) with anything near reach the per-sphere pass, and a
+configuration stops at its first certain collision. Every comparison has a margin of
+``_MARGIN`` on the safe side. World objects are re-read whenever the
+scene's objects change, the robot's spheres whenever held objects or filters change, and the
+finger positions on every change.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.multibody.tree import BodyIndex
+
+from planning.collision import sphere_kernel as _kernel
+from planning.collision.sphere_cover import SphereSet
+from planning.collision.sphere_fk import BatchedKinematics
+from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
+from planning.collision.sphere_robot import cover_shape, robot_spheres
+from planning.model.panda import ATTACHMENT_BODY
+
+__all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
+_MARGIN = 1e-5  # m, added on the safe side of every comparison (covers rounding)
+_GROUP = 4  # spheres per culling group
+
+
+class SphereCollisionModel:
+    """Sphere-based three-way collision classification on a ``PlanningScene``.
+
+    Args:
+        scene: the planning scene.
+        slack: the sphere cover's slack, m (see ``_sphere_cover.cover_polytope``).
+
+    Attributes:
+        supported: False when some geometry has no sphere model or exact formula; then
+            ``classify`` answers UNKNOWN everywhere.
+    """
+
+    def __init__(self, scene, slack: float = 0.015):
+        self._scene, self._slack = scene, slack
+        plant, checker = scene.plant, scene.checker
+        self._world = int(plant.world_body().index())
+        self._filtered = checker.GetFilteredCollisionMatrix()
+        self._padding = checker.GetPaddingMatrix()
+        self._attachment = int(plant.GetBodyByName(ATTACHMENT_BODY, scene.model.instance).index())
+        self._held_cache: dict[tuple, SphereSet] = {}
+        self._signature = self._held_signature = self._version = None
+        self.supported = True
+        try:
+            query = checker.MakeStandaloneModelContext().GetQueryObject()
+            bodies = [
+                int(b)
+                for b in plant.GetBodyIndices(scene.model.instance)
+                if plant.GetCollisionGeometriesForBody(plant.get_body(b))
+            ]
+            self._robot = robot_spheres(plant, query.inspector(), bodies, slack)
+            self._bodies = [*self._robot, self._attachment]
+            self._kin = BatchedKinematics(plant, self._bodies)
+        except NotImplementedError:
+            self.supported = False
+        self.sync()
+        self.classify(np.zeros((1, 7)))  # compiles or loads the kernel now, not mid-request
+
+    # ---------------------------------------------------------------------------- scene ----
+    def sync(self) -> None:
+        """Re-reads world objects, held objects and finger positions when they changed."""
+        scene = self._scene
+        version = getattr(scene, "version", None)  # PlanningScene bumps it on every change
+        if version is not None and version == self._version:
+            return
+        self._version = version
+        world, held = scene.world_objects, scene.attached_objects
+        filtered = scene.checker.GetFilteredCollisionMatrix()
+        signature = (
+            tuple((n, id(o)) for n, o in world.items()),
+            (tuple((n, id(o)) for n, o in held.items()), filtered.tobytes()),
+            tuple(scene.finger_positions),
+        )
+        if signature == self._signature:
+            return
+        self._signature = signature
+        self._template = scene.full_q(np.zeros(7))
+        self._arm = scene.model.arm_indices
+        self._objects_ok = all(o.shape in ("box", "cylinder", "sphere") for o in world.values())
+        self._objects_ok &= all(o.shape in ("box", "cylinder", "sphere") for o in held.values())
+        if self.supported and self._objects_ok:
+            if signature[1] != self._held_signature:  # held objects or allowed pairs changed
+                self._filtered = filtered
+                self._build_robot(held)
+                self._held_signature = signature[1]
+            self._data = KernelData(
+                *self._kin.arrays(),
+                template=np.ascontiguousarray(self._template, dtype=float),
+                arm=np.asarray(self._arm, dtype=np.int64),
+                **self._robot_arrays,
+                objects=_primitives(world.values()),
+            )
+
+    def _build_robot(self, held) -> None:
+        sets = dict(self._robot)
+        held_sets = [self._held(obj) for obj in held.values()]
+        if held_sets:
+            sets[self._attachment] = SphereSet.concat(held_sets)
+        slot = {b: k for k, b in enumerate(self._bodies)}
+        present = list(sets)
+        owner = np.concatenate([np.full(len(sets[b].radius), b) for b in present])
+        self._slot = np.array([slot[b] for b in owner], dtype=int)
+        p_BS = np.vstack([sets[b].p_BS for b in present])
+        radius = np.concatenate([sets[b].radius for b in present])
+        inner = np.concatenate([sets[b].inner for b in present])
+        self._radius = radius
+        # Groups of up to _GROUP neighbouring spheres of one body, each with a bounding sphere,
+        # and a bounding sphere of each body's groups: configurations are culled per body, then
+        # per group, before spheres are looked at.
+        groups = [(b, m) for b in present for m in _groups(np.flatnonzero(owner == b), p_BS)]
+        bounds = [_bound(p_BS[m], radius[m]) for _, m in groups]
+        group_centre = np.array([c for c, _ in bounds]).reshape(-1, 3)
+        group_radius = np.array([r for _, r in bounds])
+        group_body = np.array([present.index(b) for b, _ in groups], dtype=np.int64)
+        body_bounds = [
+            _bound(group_centre[group_body == k], group_radius[group_body == k])
+            for k in range(len(present))
+        ]
+        step = self._kin.out  # kinematic step of each of self._bodies
+        members = np.zeros((len(groups), _GROUP), dtype=np.int64)
+        for g, (_, m) in enumerate(groups):
+            members[g, : len(m)] = m
+        used = np.arange(_GROUP)[None, :] < np.array([len(m) for _, m in groups])[:, None]
+        # Environment: groups of bodies not filtered against the world (not the welded base).
+        env = [g for g, (b, _) in enumerate(groups) if self._filtered[b, self._world] == 0]
+        world_pad = np.array([self._padding[b, self._world] for b in present])
+        pad = world_pad[group_body[env]][:, None]
+        r_out = radius[members[env]] + np.maximum(pad, 0.0) + _MARGIN
+        r_in = inner[members[env]]
+        body_radius = np.array([r for _, r in body_bounds])
+        arrays = dict(
+            sphere_step=step[self._slot],
+            p_BS=p_BS,
+            body_step=step[[slot[b] for b in present]],
+            p_BL=np.array([c for c, _ in body_bounds]).reshape(-1, 3),
+            body_reach=body_radius + np.maximum(world_pad, 0.0) + _MARGIN,
+            group_step=step[[slot[b] for b, _ in groups]],
+            p_BG=group_centre,
+            env_group=np.array(env, dtype=np.int64),
+            env_body=group_body[env],
+            env_reach2=(group_radius[env] + np.maximum(pad[:, 0], 0.0) + _MARGIN) ** 2,
+            env_member=members[env],
+            env_out=np.where(used[env], _squared(r_out), -1.0),
+            env_in=np.where(used[env] & (r_in > 0), _squared(r_in + pad - _MARGIN), -1.0),
+        )
+        # Self-collision: group pairs of the body pairs the checker checks, sphere pairs padded
+        # to _GROUP**2 per group pair, in runs per body pair.
+        checked_bodies = self._checked_body_pairs(present)
+        checked = sorted(
+            (
+                (present.index(a), present.index(b), g, h)
+                for g, (a, _) in enumerate(groups)
+                for h, (b, _) in enumerate(groups)
+                if (a, b) in checked_bodies
+            ),
+        )
+        body_pairs = list(dict.fromkeys((i, j) for i, j, _, _ in checked))
+        run = np.searchsorted(
+            [i * len(present) + j for i, j, _, _ in checked],
+            [i * len(present) + j for i, j in body_pairs] + [np.inf],
+        )
+        # Every (sphere of g, sphere of h) of each checked group pair, _GROUP**2 per row.
+        g, h = (np.array([c[k] for c in checked], dtype=np.int64) for k in (2, 3))
+        shape = (len(checked), _GROUP * _GROUP)
+        pair_a = np.broadcast_to(members[g][:, :, None], (len(g), _GROUP, _GROUP)).reshape(shape)
+        pair_b = np.broadcast_to(members[h][:, None, :], (len(h), _GROUP, _GROUP)).reshape(shape)
+        valid = (used[g][:, :, None] & used[h][:, None, :]).reshape(shape)
+        owner_of = np.array([b for b, _ in groups], dtype=np.int64)  # body index of each group
+        pad = self._padding[owner_of[g], owner_of[h]].reshape(-1, 1)
+        reach = group_radius[g] + group_radius[h] + np.maximum(pad[:, 0], 0.0) + _MARGIN
+        r_out = radius[pair_a] + radius[pair_b] + np.maximum(pad, 0.0) + _MARGIN
+        pair_out = np.where(valid, _squared(r_out), -1.0)
+        ok = valid & (inner[pair_a] > 0) & (inner[pair_b] > 0)
+        pair_in = np.where(ok, _squared(inner[pair_a] + inner[pair_b] + pad - _MARGIN), -1.0)
+        body_pad = np.array(
+            [max(self._padding[present[i], present[j]], 0.0) for i, j in body_pairs]
+        )
+        body_pairs = np.array(body_pairs, dtype=np.int64).reshape(-1, 2)
+        arrays.update(
+            body_pair=body_pairs,
+            body_pair_reach2=(
+                body_radius[body_pairs[:, 0]] + body_radius[body_pairs[:, 1]] + body_pad + _MARGIN
+            )
+            ** 2,
+            body_pair_start=np.asarray(run, dtype=np.int64),
+            pair_group=np.array([(g, h) for _, _, g, h in checked], dtype=np.int64).reshape(-1, 2),
+            pair_reach2=reach**2,
+            pair_a=pair_a,
+            pair_b=pair_b,
+            pair_out=pair_out,
+            pair_in=pair_in,
+        )
+        self._robot_arrays = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
+
+    def _checked_body_pairs(self, present: list[int]) -> set[tuple[int, int]]:
+        """Body pairs (a before b in ``present``) that Drake's checker checks: filtered
+        neither by the checker nor in its SceneGraph model (the checker's queries honour
+        both)."""
+        plant = self._scene.plant
+        inspector = self._scene.checker.MakeStandaloneModelContext().GetQueryObject().inspector()
+        geometries = {
+            b: plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b))) for b in present
+        }
+        pairs = set()
+        for i, a in enumerate(present):
+            for b in present[i + 1 :]:
+                if self._filtered[a, b] != 0:
+                    continue
+                if any(
+                    not inspector.CollisionFiltered(g, h)
+                    for g in geometries[a]
+                    for h in geometries[b]
+                ):
+                    pairs.add((a, b))
+        return pairs
+
+    def _held(self, obj) -> SphereSet:
+        key = (obj.shape, obj.size)
+        if key not in self._held_cache:
+            from pydrake.math import RigidTransform
+
+            shape = obj.drake_shape()
+            self._held_cache[key] = cover_shape(shape, RigidTransform(), self._slack, scaled=True)
+        cover = self._held_cache[key]
+        return cover.transformed(obj.X_PO.rotation().matrix(), obj.X_PO.translation())
+
+    @property
+    def active(self) -> bool:
+        """True when ``classify`` can answer (all geometry has spheres or exact formulas)."""
+        self.sync()
+        return self.supported and self._objects_ok
+
+    @property
+    def num_spheres(self) -> int:
+        return len(self._radius)
+
+    # -------------------------------------------------------------------------- queries ----
+    def sphere_centres(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Returns the spheres' centres p_WS (N, S, 3) for configurations qs (N, 7) and their
+        outer radii (S,), m."""
+        self.sync()
+        T = self._transforms(np.atleast_2d(qs))  # (K, N, 4, 4)
+        X = T[self._slot]  # (S, N, 4, 4)
+        p = self._robot_arrays["p_BS"]
+        p_WS = np.einsum("snij,sj->nsi", X[:, :, :3, :3], p) + X[:, :, :3, 3].transpose(1, 0, 2)
+        return p_WS, self._radius.copy()
+
+    def _transforms(self, qs: np.ndarray) -> np.ndarray:
+        full = np.tile(self._template, (len(qs), 1))
+        full[:, self._arm] = qs
+        return self._kin.transforms(full)
+
+    def classify(self, qs) -> np.ndarray:
+        """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, 7), rad."""
+        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        state = np.full(len(qs), UNKNOWN, dtype=np.int8)
+        if self.active:  # each configuration as a segment from itself to itself: one sample
+            first, _, unknown, _ = _kernel.prefixes(qs, qs, 1.0, False, self._data)
+            state[:] = np.where(first == 0, COLLIDING, FREE)
+            state[unknown] = UNKNOWN
+        return state
+
+    def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
+        """Classifies samples of segments from their starts up to their first blocking one;
+        see ``_sphere_kernel.prefixes``. Without a sphere model every sample is UNKNOWN."""
+        q_a = np.ascontiguousarray(np.atleast_2d(q_a), dtype=float)
+        q_b = np.ascontiguousarray(np.atleast_2d(q_b), dtype=float)
+        if self.active:
+            return _kernel.prefixes(q_a, q_b, float(step), stop_at_unknown, self._data)
+        n = np.maximum(1, np.ceil(np.linalg.norm(q_b - q_a, axis=1) / step).astype(np.int64))
+        if stop_at_unknown:
+            return np.zeros(len(n), dtype=np.int64), n, np.zeros(0, int), np.zeros(0, int)
+        edge = np.repeat(np.arange(len(n)), n)
+        return n.copy(), n, edge, np.arange(len(edge)) - np.repeat(np.cumsum(n) - n, n)
+
+
+def _squared(reach: np.ndarray) -> np.ndarray:
+    """reach**2 where reach > 0, else -1 (never above a squared distance)."""
+    return np.where(reach > 0, reach * reach, -1.0)
+
+
+def _bound(centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, float]:
+    """A sphere containing spheres (centres (P, 3), radii (P,)): its centre and radius, m."""
+    centre = centres.mean(axis=0)
+    return centre, float((np.linalg.norm(centres - centre, axis=1) + radii).max())
+
+
+def _groups(members: np.ndarray, p: np.ndarray, size: int = _GROUP) -> list[np.ndarray]:
+    """Splits sphere indices into groups of at most ``size`` neighbours: sorted along the
+    direction in which their centres p[members] spread most, then cut in runs."""
+    if len(members) <= size:
+        return [members]
+    x = p[members] - p[members].mean(axis=0)
+    direction = np.linalg.svd(x, full_matrices=False)[2][0]
+    ordered = members[np.argsort(x @ direction)]
+    return [ordered[k : k + size] for k in range(0, len(ordered), size)]
+
+
+def _primitives(objects) -> np.ndarray:
+    """World boxes, cylinders and spheres as the kernel's object rows (``KernelData``): object
+    O as its kind, W = R_WO^T and offset = R_WO^T p_WO (so p_OQ = W p_WQ - offset), its sizes
+    (box: half sizes; cylinder: radius, half length; sphere: radius) and the corners of an
+    axis-aligned box around it, m."""
+    objects = list(objects)
+    kinds = {"box": 0, "cylinder": 1, "sphere": 2}
+    W = np.array([o.X_PO.rotation().matrix().T for o in objects]).reshape(-1, 3, 3)
+    p = np.array([o.X_PO.translation() for o in objects]).reshape(-1, 3)
+    size = np.zeros((len(objects), 3))
+    half = np.zeros((len(objects), 3))  # half extents along the object's own axes
+    for k, o in enumerate(objects):
+        if o.shape == "box":
+            size[k] = half[k] = np.asarray(o.size) / 2
+        elif o.shape == "cylinder":
+            size[k, :2] = o.size[0], o.size[1] / 2
+            half[k] = o.size[0], o.size[0], o.size[1] / 2
+        else:
+            size[k, 0] = o.size[0]
+            half[k] = o.size[0]
+    extent = np.einsum("kji,kj->ki", np.abs(W), half)  # |R_WO| half
+    rows = np.zeros((len(objects), _kernel.OBJ_COLUMNS))
+    rows[:, _kernel.OBJ_KIND] = [kinds[o.shape] for o in objects]
+    rows[:, _kernel.OBJ_W : _kernel.OBJ_W + 9] = W.reshape(-1, 9)
+    rows[:, _kernel.OBJ_OFFSET : _kernel.OBJ_OFFSET + 3] = np.einsum("kij,kj->ki", W, p)
+    rows[:, _kernel.OBJ_SIZE : _kernel.OBJ_SIZE + 3] = size
+    rows[:, _kernel.OBJ_LOWER : _kernel.OBJ_LOWER + 3] = p - extent
+    rows[:, _kernel.OBJ_UPPER : _kernel.OBJ_UPPER + 3] = p + extent
+    return rows

@@ -1,0 +1,2 @@
+"""Path search: inverse kinematics, RRT-Connect (one at a time and batched), shortcutting,
+Cartesian paths, IRIS regions with GCS, and KinematicTrajectoryOptimization smoothing."""

@@ -1,0 +1,1 @@
+"""Time parameterisation of joint paths within velocity and acceleration limits."""
