@@ -1,7 +1,7 @@
 """Pick-and-place benchmark: the default scene (repeated) and random scenes, in both modes.
 
     python benchmarks/pickplace_benchmark.py [--repeats 5] [--random 20] [--seed 7]
-        [--modes physics kinematic] [--station FILE] [--report FILE]
+        [--modes physics kinematic] [--scenario FILE] [--report FILE]
 
 Prints, per mode: successes, place error (median, max), planning time per task (median; the
 sum of every step's planning, the feasibility check included), and the real-time factor
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from diagrams.panda_station import load_station_config
+from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.planning_station import make_planning_station
 from planning.task.pick_place import PickPlaceTask
 from planning.task.scene_generator import random_scene
@@ -29,7 +29,7 @@ def _progress(items, label):
 
 
 def run_one(config, mode):
-    report = PickPlaceTask(make_planning_station(config, mode=mode)).run()
+    report = PickPlaceTask(make_planning_station(config, mode=mode), config.task).run()
     return report.to_dict()
 
 
@@ -56,10 +56,10 @@ def main(argv=None) -> int:
     parser.add_argument("--random", type=int, default=20)
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--modes", nargs="+", default=["physics", "kinematic"])
-    parser.add_argument("--station", type=Path)
+    parser.add_argument("--scenario", type=Path, help="pick-and-place scenario YAML")
     parser.add_argument("--report", type=Path)
     args = parser.parse_args(argv)
-    config = load_station_config(args.station)
+    config = load_pickplace_scenario(args.scenario)
     results = {}
     for mode in args.modes:
         rows = [run_one(config, mode) for _ in _progress(range(args.repeats), f"{mode} default")]

@@ -5,7 +5,9 @@ Prints collision checks per second (empty scene with the table, and an MBM books
 edge checks per second, IK solve times and success rates (full pose, position only, orientation
 only), add and remove times at several scene sizes, and per MBM family how many problems have a
 collision-free start and goal under our model with the fingers at the request's own positions
-(and, for comparison, clamped to the URDF's 0.04 m limit).
+(and, for comparison, clamped to the URDF's 0.04 m limit). The MBM problems are the repository's
+own copy (``benchmarks/data/mbm_panda``) unless ``--dataset`` names a ``problems`` folder, a
+folder holding ``problems.tar.bz2`` or the archive itself.
 """
 
 import argparse
@@ -18,12 +20,8 @@ from pydrake.math import RigidTransform
 from tqdm import tqdm
 
 import planning
-from drake_sim.base.resources import cache_dir
+from planning.benchmark import problems_folder
 from planning.io import mbm
-
-_DEFAULT_DATASET = (
-    Path(__file__).resolve().parent.parent.parent / "shared/benchmarks/mbm_panda/problems.tar.bz2"
-)
 
 
 def random_configurations(scene, count: int, rng) -> np.ndarray:
@@ -107,10 +105,7 @@ def bench_add_remove(scene) -> None:
             scene.remove_object(name)
 
 
-def bench_mbm(scene, dataset: Path) -> None:
-    folder = dataset if dataset.is_dir() else mbm.unpack(dataset, cache_dir() / "mbm_panda")
-    if (folder / "problems").is_dir():
-        folder = folder / "problems"
+def bench_mbm(scene, folder: Path) -> None:
     rows = collections.defaultdict(lambda: collections.Counter())
     load_times = []
     problems = list(mbm.iter_problems(folder))
@@ -145,13 +140,15 @@ def bench_mbm(scene, dataset: Path) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--dataset", type=Path, default=_DEFAULT_DATASET)
+    parser.add_argument(
+        "--dataset", type=Path, default=None, help="default: benchmarks/data/mbm_panda"
+    )
     parser.add_argument("--samples", type=int, default=20000, help="collision checks to time")
     parser.add_argument("--ik-poses", type=int, default=100)
     parser.add_argument("--collision-geometry", default=None, help="convex_mesh or primitives")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    config = planning.load_panda_config()
+    config = planning.PandaPlanningConfig()
     if args.collision_geometry:
         config.model.collision_geometry = args.collision_geometry
     start = time.perf_counter()
@@ -162,19 +159,15 @@ def main() -> None:
     bench_checks(scene, args.samples, rng, "table only")
     bench_ik(scene, args.ik_poses, rng)
     bench_add_remove(scene)
-    if args.dataset.exists():
-        problem = next(
-            mbm.iter_problems(
-                mbm.unpack(args.dataset, cache_dir() / "mbm_panda"),
-                families=["bookshelf_thin_panda"],
-                limit=1,
-            )
-        )
+    dataset = args.dataset or mbm.default_dataset()
+    if dataset.exists():
+        folder = problems_folder(dataset)
+        problem = next(mbm.iter_problems(folder, families=["bookshelf_thin_panda"], limit=1))
         scene.load_moveit(problem.scene_file)
         bench_checks(scene, args.samples, rng, "MBM bookshelf_thin scene 1")
-        bench_mbm(scene, args.dataset)
+        bench_mbm(scene, folder)
     else:
-        print(f"MBM dataset not found at {args.dataset}: skipped")
+        print(f"MBM dataset not found at {dataset}: skipped")
 
 
 if __name__ == "__main__":

@@ -14,16 +14,13 @@ writes the commanded positions (and the object's commanded pose) into its own co
 plant and sends the geometry poses to the SceneGraph; ``panda.state`` is the command and its
 finite-difference velocity.
 
-Settings live in ``config/station.yaml`` (``PandaStationConfig``); the scene comes from our
-pick-and-place YAML (``config/pickplace.yaml``, schema ``planning.io.scene_files.SceneFile``).
+Settings are a ``PandaStationConfig``, the ``station`` section of the pick-and-place scenario
+(``diagrams.pickplace_scenario``), which also fills in its robot model, scene and start.
 """
 
 import dataclasses as dc
-from pathlib import Path
 
 import numpy as np
-import yaml
-from pydrake.common.yaml import yaml_load_typed
 from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Rgba, SceneGraph
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
@@ -43,9 +40,15 @@ from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
 
 from diagrams.panda_station_systems import FreeBodyPose, add_scene_box, box_pose
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.resources import config_dir
 from planning.config import PandaModelConfig
 from planning.io.scene_files import SceneFile
+from planning.model.layout import (
+    FINGER_OPEN,
+    NUM_ARM_JOINTS,
+    NUM_FINGERS,
+    NUM_POSITIONS,
+    READY_Q,
+)
 from planning.model.panda import (
     ARM_JOINTS,
     FINGER_JOINTS,
@@ -60,8 +63,6 @@ PANDA = "panda"
 OBJECT = "object"
 """The object's model instance and body name; its ports are ``object.<signal>``."""
 MODES = ("physics", "kinematic")
-NUM_POSITIONS = 9
-"""Panda command size: 7 arm joints (rad, base to flange) then 2 fingers (m, each)."""
 
 
 def _default_plant() -> MultibodyPlantConfig:
@@ -75,7 +76,8 @@ def _default_plant() -> MultibodyPlantConfig:
 
 @dc.dataclass
 class PandaStationConfig:
-    """Everything the station needs but the scene (``config/station.yaml``).
+    """Everything the station needs: plant, gains, friction, viewer, and (filled in by the
+    scenario) the robot model, the scene and the start.
 
     Gains are Drake implicit PD gains per joint actuator; effort limits clamp PD plus gravity
     compensation. Arm values are per joint 1..7; finger values are per finger.
@@ -98,47 +100,28 @@ class PandaStationConfig:
     # Point-contact stiffness of the fingers, the object, the table and the obstacle, N/m
     # (pairs combine in series); the plant's default lets 70 N sink a finger ~9 mm in.
     point_stiffness: float = 1.0e6
-    # Initial Panda positions: 7 arm joints (rad, franka "ready") and 2 fingers (m).
+    # Initial Panda positions: the arm joints (rad) then the fingers (m). In a pick-and-place
+    # scenario: its initial_configuration, fingers at robot.model.finger_position.
     initial_q: list[float] = dc.field(
-        default_factory=lambda: (
-            [0.0, -0.785398, 0.0, -2.356194, 0.0, 1.570796, 0.785398] + [0.04, 0.04]
+        default_factory=lambda: [*READY_Q, *[FINGER_OPEN] * NUM_FINGERS]
+    )
+    visualization: VisualizationConfig = dc.field(
+        default_factory=lambda: VisualizationConfig(
+            publish_contacts=False, publish_proximity=False, publish_inertia=False
         )
     )
-    visualization: VisualizationConfig = dc.field(default_factory=VisualizationConfig)
-    # The scene (table, object, obstacle; place is ignored here). Filled by load_station_config.
+    # The scene (table, object, obstacle; place is ignored here). In a pick-and-place
+    # scenario: its scene section.
     scene: SceneFile = dc.field(default_factory=SceneFile)
-
-
-def load_station_config(
-    station_file: Path | str | None = None, scene_file: Path | str | None = None
-) -> PandaStationConfig:
-    """Loads ``config/station.yaml`` (or ``station_file``) and the scene (``config/pickplace.yaml``
-    or ``scene_file``) into one ``PandaStationConfig``.
-
-    Raises:
-        ConfigError: a file is missing or malformed, has an unknown key or a bad value.
-    """
-    station_file = Path(station_file or config_dir() / "station.yaml")
-    scene_file = Path(scene_file or config_dir() / "pickplace.yaml")
-    for path in (station_file, scene_file):
-        if not path.is_file():
-            raise ConfigError(f"{path}: no such file")
-    try:
-        config = yaml_load_typed(schema=PandaStationConfig, filename=str(station_file))
-        config.scene = yaml_load_typed(schema=SceneFile, filename=str(scene_file))
-    except (yaml.YAMLError, RuntimeError, ValueError, TypeError, AttributeError) as e:
-        raise ConfigError(f"{station_file} / {scene_file}: {e}") from e
-    validate_station_config(config)
-    return config
 
 
 def validate_station_config(config: PandaStationConfig) -> None:
     """Raises ConfigError for values the builder cannot use."""
     if len(config.initial_q) != NUM_POSITIONS:
-        raise ConfigError(f"initial_q has {len(config.initial_q)} values, expected 9")
+        raise ConfigError(f"initial_q has {len(config.initial_q)} values, expected {NUM_POSITIONS}")
     for name in ("arm_kp", "arm_kd", "arm_effort_limits"):
-        if len(getattr(config, name)) != 7:
-            raise ConfigError(f"{name} needs 7 values (joints 1..7)")
+        if len(getattr(config, name)) != NUM_ARM_JOINTS:
+            raise ConfigError(f"station.{name} needs {NUM_ARM_JOINTS} values (joints 1..7)")
     scene = config.scene
     for name in ("table", "object", "obstacle"):
         box = getattr(scene, name)
@@ -252,7 +235,7 @@ def make_panda_station_diagram(
     the diagram (``MultibodyPositionToGeometryPose`` holds it).
 
     Args:
-        config: station settings and the scene (``load_station_config``).
+        config: the station (``PickPlaceScenario.station_config()``).
         meshcat: where to draw (illustration geometry), or None.
         mode: "physics" or "kinematic".
 

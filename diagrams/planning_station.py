@@ -1,39 +1,39 @@
 """The Panda station with a ``MotionPlanningInterface`` joined to it, ready to use.
 
-``make_planning_station`` is what a script or a notebook calls; a user who builds their own
-diagram adds the station with ``make_panda_station_diagram`` and joins the interface with
+``make_planning_station`` is what a script or a notebook calls, with a pick-and-place scenario
+(``diagrams.pickplace_scenario``); a user who builds their own diagram adds the station with
+``make_panda_station_diagram`` and joins the interface with
 ``MotionPlanningInterface.add_to_builder`` themselves (see its docstring).
 """
 
+import dataclasses as dc
+
 from pydrake.systems.framework import DiagramBuilder
 
-from diagrams.panda_station import PandaStationConfig, make_panda_station_diagram
-from planning.config import load_panda_config
-from planning.interface import InterfaceOptions, MotionPlanningInterface
+from diagrams.panda_station import make_panda_station_diagram
+from diagrams.pickplace_scenario import PickPlaceScenario
+from planning.interface import MotionPlanningInterface
 from planning.io.scene_files import apply_scene_file
-from planning.motion_planner import MotionPlannerOptions
 from planning.planning_scene import PlanningScene
 
 
-def make_planning_scene(config: PandaStationConfig, *, meshcat=None) -> PlanningScene:
-    """A ``PlanningScene`` (the planning model of ``config/panda.yaml``) holding the station
-    scene's objects: table, object, obstacle, extra objects; ``place_position``."""
-    scene = PlanningScene(load_panda_config(), meshcat=meshcat)
-    apply_scene_file(scene, config.scene)
+def make_planning_scene(scenario: PickPlaceScenario, *, meshcat=None) -> PlanningScene:
+    """A ``PlanningScene`` of the scenario's robot holding its scene's objects (table, object,
+    obstacle, extra objects) and ``place_position``."""
+    scene = PlanningScene(scenario.robot, meshcat=meshcat)
+    apply_scene_file(scene, scenario.scene)
     return scene
 
 
 def make_planning_station(
-    config: PandaStationConfig,
+    scenario: PickPlaceScenario,
     *,
-    mode: str = "physics",
+    mode: str | None = None,
     meshcat=None,
-    planner_options: MotionPlannerOptions | None = None,
-    options: InterfaceOptions | None = None,
     realtime_rate: float = 0.0,
 ) -> MotionPlanningInterface:
-    """Builds the station (``mode`` "physics" or "kinematic"), joins a new interface on a
-    planning scene of the same scene, and starts its simulator.
+    """Builds the station of ``scenario`` (in ``mode``, default the scenario's), joins a new
+    interface on a planning scene of the same robot and scene, and starts its simulator.
 
     Returns:
         The started interface: ``interface.simulator`` runs the diagram.
@@ -42,14 +42,19 @@ def make_planning_station(
         ConfigError: bad station values or mode.
         PlanningError: INVALID_SCENE for scene values planning cannot use.
     """
-    scene = make_planning_scene(config)
-    interface = MotionPlanningInterface(scene, planner_options, options=options)
-    interface.state.set_q(config.initial_q)
+    if mode is not None:
+        scenario = dc.replace(scenario, mode=mode)
+    station_config = scenario.station_config()
+    scene = make_planning_scene(scenario)
+    interface = MotionPlanningInterface(scene, scenario.planner, options=scenario.interface)
+    interface.state.set_q(station_config.initial_q)
     builder = DiagramBuilder()
-    station = builder.AddSystem(make_panda_station_diagram(config, meshcat=meshcat, mode=mode))
+    station = builder.AddSystem(
+        make_panda_station_diagram(station_config, meshcat=meshcat, mode=scenario.mode)
+    )
     station.set_name("station")
     interface.add_to_builder(builder, station)
     diagram = builder.Build()
-    diagram.set_name(f"planning_station_{mode}")
+    diagram.set_name(f"planning_station_{scenario.mode}")
     interface.start(diagram, realtime_rate=realtime_rate)
     return interface

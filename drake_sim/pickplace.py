@@ -3,7 +3,9 @@
 With a viewer (the default) the station runs in real time in Meshcat: open the page, press
 "Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. ``--headless`` runs the task at
 once, flat out. ``--mode physics`` (default) simulates contact and grasps the object by friction;
-``--mode kinematic`` plays the planned motions back (Franka's fake hardware).
+``--mode kinematic`` plays the planned motions back (Franka's fake hardware). Everything else
+comes from one scenario (``--scenario FILE``, default ``config/pickplace_scenario.yaml``;
+``diagrams.pickplace_scenario``), with ``--scene FILE`` and ``--set key=value`` on top.
 Exit codes: 0 on success, 1 when the task is impossible or a step failed (one stderr line names
 the step and the reason), 2 on bad input.
 """
@@ -16,13 +18,18 @@ from pathlib import Path
 
 from pydrake.geometry import StartMeshcat
 
-from diagrams.panda_station import MODES, load_station_config
+from diagrams.panda_station import MODES, PandaStationConfig
+from diagrams.pickplace_scenario import (
+    PickPlaceScenario,
+    dump_pickplace_scenario,
+    load_pickplace_scenario,
+)
 from diagrams.planning_station import make_planning_station
 from drake_sim.base import cli
+from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.errors import ErrorCode, PlanningError
-from planning.motion_planner import load_planner_options
 from planning.task.pick_place import PickPlaceTask, StepReport
 
 BUTTON = "Pick"
@@ -33,18 +40,47 @@ def _parse_args(argv):
         prog="python -m drake_sim.pickplace", description=__doc__.split("\n")[0]
     )
     parser.add_argument(
-        "--scene", type=Path, default=config_dir() / "pickplace.yaml", help="scene YAML"
+        "--scenario",
+        type=Path,
+        default=config_dir() / "pickplace_scenario.yaml",
+        help="scenario YAML (default config/pickplace_scenario.yaml)",
     )
-    parser.add_argument(
-        "--station", type=Path, default=config_dir() / "station.yaml", help="station YAML"
-    )
-    parser.add_argument("--mode", choices=MODES, default="physics", help="default: physics")
+    parser.add_argument("--scene", type=Path, help="scene YAML (replaces the scenario's scene)")
+    parser.add_argument("--station", type=Path, help="YAML of the scenario's station section")
+    parser.add_argument("--mode", choices=MODES, help="default: the scenario's (physics)")
     parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
     parser.add_argument("--no-wait", action="store_true", help="with a viewer: start at once")
     parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     parser.add_argument("--report", type=Path, help="write the JSON report")
     parser.add_argument("--seed", type=cli.non_negative_int, help="planner random seed")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scenario value, e.g. --set task.lift_height=0.08 (repeatable)",
+    )
+    parser.add_argument(
+        "--print-scenario", action="store_true", help="print the whole scenario as YAML and exit"
+    )
     return parser.parse_args(argv)
+
+
+def load_scenario(args) -> PickPlaceScenario:
+    """The scenario of the command line: file, scene, station, --set, --mode and --seed."""
+    overrides = list(args.set)
+    if args.mode is not None:
+        overrides.append(f"mode={args.mode}")
+    if args.seed is not None:
+        overrides.append(f"planner.seed={args.seed}")
+    scenario = load_pickplace_scenario(args.scenario, scene_file=args.scene, overrides=overrides)
+    if args.station is not None:
+        station = load_typed(PandaStationConfig, filename=args.station, defaults=scenario.station)
+        for key in ("model", "scene", "initial_q"):
+            if getattr(station, key) != getattr(scenario.station, key):
+                raise ConfigError(f"{args.station}: 'station.{key}' is set by the scenario")
+        scenario = dc.replace(scenario, station=station)
+    return scenario
 
 
 def _print_step(step: StepReport) -> None:
@@ -67,20 +103,14 @@ def _wait_for_button(mpi, meshcat) -> None:
 def main(argv=None) -> int:
     args = _parse_args(argv)
     logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors only
-    config = load_station_config(args.station, args.scene)
-    planner_options = load_planner_options()
-    if args.seed is not None:
-        planner_options = dc.replace(planner_options, seed=args.seed)
+    scenario = load_scenario(args)
+    if args.print_scenario:
+        print(dump_pickplace_scenario(scenario), end="")
+        return cli.EXIT_OK
     viewer = not args.headless
     meshcat = StartMeshcat() if viewer or args.record else None
     try:
-        mpi = make_planning_station(
-            config,
-            mode=args.mode,
-            meshcat=meshcat,
-            planner_options=planner_options,
-            realtime_rate=1.0 if viewer else 0.0,
-        )
+        mpi = make_planning_station(scenario, meshcat=meshcat, realtime_rate=1.0 if viewer else 0.0)
     except PlanningError as e:
         if e.code is ErrorCode.INVALID_SCENE:
             raise ConfigError(e.message) from None
@@ -91,11 +121,11 @@ def main(argv=None) -> int:
             meshcat.StartRecording()
     if viewer and not args.no_wait:
         _wait_for_button(mpi, meshcat)
-    task = PickPlaceTask(mpi, on_step=_print_step)
+    task = PickPlaceTask(mpi, scenario.task, on_step=_print_step)
     report = task.run()
     if args.record:
         cli.write_replay(meshcat, args.record)
-    data = {"mode": args.mode, **report.to_dict()}
+    data = {"mode": scenario.mode, **report.to_dict()}
     error = "n/a" if report.place_error_m is None else f"{report.place_error_m:.4f} m"
     print(
         f"{'success' if report.success else 'failure'}: place error {error}, planning "

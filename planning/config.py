@@ -1,19 +1,19 @@
-"""Typed configuration of the Panda planning model, its scene and its IK (``config/panda.yaml``).
+"""Typed configuration of the Panda planning model, its scene and its IK.
 
-Every field has a default, so a YAML file needs only the keys it changes; unknown keys are errors
-(``pydrake.common.yaml.yaml_load_typed``). Joint positions are in rad (arm) and m (fingers),
-lengths in m, times in s. This module has no ``from __future__ import annotations``: the YAML
-loader reads the field types at run time.
+Every field has a default (the one place of each value), so a YAML file needs only the keys it
+changes; unknown keys are errors (``drake_sim.base.config.load_typed``). In the pick-and-place
+scenario this is the ``robot`` section (``diagrams.pickplace_scenario``). Joint positions are in
+rad (arm) and m (fingers), lengths in m, times in s. This module has no ``from __future__ import
+annotations``: the YAML loader reads the field types at run time.
 """
 
 import dataclasses as dc
+import math
 from pathlib import Path
 
-import yaml
-from pydrake.common.yaml import yaml_load_typed
-
+from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.resources import config_dir
+from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, NUM_ARM_JOINTS, READY_Q
 
 
 @dc.dataclass
@@ -35,12 +35,24 @@ class PandaModelConfig:
     # fingertips, 0.1034 m beyond the hand's flange side along its z axis (MoveIt's end effector).
     ee_frame: str = "panda_hand_tcp"
     # Default opening of each finger, m from the centre (0 closed, 0.04 fully open).
-    finger_position: float = 0.04
+    finger_position: float = FINGER_OPEN
     # Named arm configurations, rad, 7 joints each; the SRDF's group_state entries are added
     # (a name here wins over the SRDF).
-    named_configurations: dict[str, list[float]] = dc.field(default_factory=dict)
+    named_configurations: dict[str, list[float]] = dc.field(
+        default_factory=lambda: {
+            "ready": list(READY_Q),  # franka "ready"
+            "extended": [0.0, 0.6, 0.0, -0.9, 0.0, 1.5, math.pi / 4],  # reaching forward
+            "transport": [0.0, -0.9, 0.0, -2.8, 0.0, 1.9, math.pi / 4],  # folded, hand up close
+        }
+    )
     # Link pairs never checked against each other, in addition to the SRDF's disabled pairs.
-    extra_disabled_collisions: list[list[str]] = dc.field(default_factory=list)
+    # The hand-held object's body and the fingers never collide with what the fingers hold.
+    extra_disabled_collisions: list[list[str]] = dc.field(
+        default_factory=lambda: [
+            ["panda_attachment", "panda_leftfinger"],
+            ["panda_attachment", "panda_rightfinger"],
+        ]
+    )
     # Joint-space step for edge collision checks, rad.
     edge_step_size: float = 0.05
     # Padding added to robot-environment and robot-robot distances, m.
@@ -70,7 +82,7 @@ class IkOptions:
 
 @dc.dataclass
 class PandaPlanningConfig:
-    """Everything ``config/panda.yaml`` holds."""
+    """The Panda for planning: its model, the table a new scene starts with, and IK."""
 
     model: PandaModelConfig = dc.field(default_factory=PandaModelConfig)
     # The table every new PlanningScene starts with, as a world object named "table"; null: none.
@@ -78,53 +90,42 @@ class PandaPlanningConfig:
     ik: IkOptions = dc.field(default_factory=IkOptions)
 
 
-def default_config_path() -> Path:
-    """Returns the path of ``config/panda.yaml``."""
-    return config_dir() / "panda.yaml"
-
-
 def load_panda_config(
     filename: Path | str | None = None, *, data: str | None = None
 ) -> PandaPlanningConfig:
-    """Loads a ``PandaPlanningConfig`` from a YAML file or string.
+    """Loads a ``PandaPlanningConfig`` from a YAML file or string (missing keys keep defaults).
 
     Args:
-        filename: the YAML file; ``config/panda.yaml`` when both arguments are None.
-        data: YAML text to load instead of a file.
+        filename: the YAML file; or
+        data: YAML text.
 
     Raises:
         ConfigError: the file is missing or malformed, or has an unknown key or a bad value.
     """
-    if data is None:
-        filename = Path(filename) if filename is not None else default_config_path()
-        if not filename.is_file():
-            raise ConfigError(f"{filename}: no such file")
-    where = str(filename) if data is None else "<yaml string>"
-    try:
-        if data is None:
-            config = yaml_load_typed(schema=PandaPlanningConfig, filename=str(filename))
-        else:
-            config = yaml_load_typed(schema=PandaPlanningConfig, data=data)
-    except (yaml.YAMLError, RuntimeError, ValueError, TypeError, AttributeError) as e:
-        raise ConfigError(f"{where}: {e}") from e
-    _validate(config, where)
+    where = str(filename) if filename is not None else "<yaml>"
+    config = load_typed(PandaPlanningConfig, filename=filename, data=data, where=where)
+    check_panda_config(config, where)
     return config
 
 
-def _validate(config: PandaPlanningConfig, where: str) -> None:
+def check_panda_config(config: PandaPlanningConfig, where: str = "robot") -> None:
+    """Raises ConfigError for values the planning model cannot use."""
     model = config.model
     for name, q in model.named_configurations.items():
-        if len(q) != 7:
+        if len(q) != NUM_ARM_JOINTS:
             raise ConfigError(
-                f"{where}: model.named_configurations.{name} has {len(q)} values, expected 7"
+                f"{where}: model.named_configurations.{name} has {len(q)} values, "
+                f"expected {NUM_ARM_JOINTS}"
             )
     for pair in model.extra_disabled_collisions:
         if len(pair) != 2:
             raise ConfigError(
                 f"{where}: model.extra_disabled_collisions entry {pair} is not a pair"
             )
-    if not 0.0 <= model.finger_position <= 0.04:
-        raise ConfigError(f"{where}: model.finger_position must be in [0, 0.04] m")
+    if not FINGER_CLOSED <= model.finger_position <= FINGER_OPEN:
+        raise ConfigError(
+            f"{where}: model.finger_position must be in [{FINGER_CLOSED}, {FINGER_OPEN}] m"
+        )
     if model.edge_step_size <= 0.0:
         raise ConfigError(f"{where}: model.edge_step_size must be positive")
     if config.table is not None and (

@@ -12,7 +12,7 @@ the ``RobotState`` at the latest measured joints. Long actions either block (``e
 
 Typical use::
 
-    mpi = make_planning_station(config, mode="kinematic")   # diagrams.planning_station
+    mpi = make_planning_station(load_pickplace_scenario(), mode="kinematic")  # diagrams
     result = mpi.move_to_pose(X_WG)                           # plan, check, execute, wait
     handle = mpi.execute_async(mpi.planner.plan_to_named("ready").trajectory)
     while not handle.done():
@@ -22,7 +22,6 @@ Typical use::
 from __future__ import annotations
 
 import concurrent.futures
-import dataclasses as dc
 from collections.abc import Callable
 
 import numpy as np
@@ -32,28 +31,13 @@ from pydrake.systems.analysis import Simulator
 from planning.errors import ErrorCode, PlanningError
 from planning.execution.commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
 from planning.execution.handles import ActionHandle, ExecutionResult, PlanHandle, submit
+from planning.execution.options import InterfaceOptions
+from planning.model.layout import FINGER_CLOSED, FINGER_OPEN
 from planning.model.panda import ATTACHMENT_BODY
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 from planning.robot_state import RobotState
 
-FINGER_OPEN = 0.04  # m, each finger fully open
 """Each finger's fully open position, m."""
-
-
-@dc.dataclass
-class InterfaceOptions:
-    """How the interface executes and decides that a motion has finished."""
-
-    poll_period: float = 0.01  # s of simulated time between checks of running actions
-    start_tolerance: float = 0.02  # rad, largest joint gap between a plan's start and the robot
-    goal_tolerance: float = 0.01  # rad, largest joint error at the end of a successful execution
-    settle_time: float = 0.05  # s after the commanded motion ends before checking the arm
-    settle_velocity: float = 0.05  # rad/s, the arm counts as at rest below this
-    settle_timeout: float = 1.0  # s after the commanded end, at most, before deciding
-    finger_speed: float = 0.05  # m/s per finger (the Franka hand: 0.1 m/s in width)
-    finger_tolerance: float = 0.002  # m, a finger this close to its target reached it
-    finger_settle_velocity: float = 0.005  # m/s, the fingers count as at rest below this
-    finger_settle_timeout: float = 0.5  # s after the commanded end, at most
 
 
 class MotionPlanningInterface:
@@ -61,7 +45,7 @@ class MotionPlanningInterface:
 
     Args:
         scene: the ``PlanningScene`` (kept in sync by the user: add obstacles, attach objects).
-        planner_options: ``MotionPlanner`` options; ``config/planner.yaml`` when None.
+        planner_options: ``MotionPlanner`` options; ``MotionPlannerOptions()`` when None.
         options: execution settings.
     """
 
@@ -310,9 +294,10 @@ class MotionPlanningInterface:
         limit; kinematic: they stop at its faces and the object follows the hand until the
         gripper opens again).
         """
-        if not 0.0 <= position <= FINGER_OPEN:
+        if not FINGER_CLOSED <= position <= FINGER_OPEN:
             raise PlanningError(
-                ErrorCode.INVALID_GOAL, f"finger position {position} m is outside [0, 0.04]"
+                ErrorCode.INVALID_GOAL,
+                f"finger position {position} m is outside [{FINGER_CLOSED}, {FINGER_OPEN}]",
             )
         if self._gripper is not None and not self._gripper.done():
             self._gripper.cancel()

@@ -38,6 +38,7 @@ import numpy as np
 
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
+from planning.model.layout import FINGER_OPEN, NUM_FINGERS
 from planning.model.panda import ARM_JOINTS
 from planning.scene_objects import describe_scene
 from planning.timing.retime import RetimeOptions, Timing
@@ -72,7 +73,7 @@ class Plan:
     max_acceleration: np.ndarray
     velocity_scaling: float = 1.0
     acceleration_scaling: float = 1.0
-    finger_positions: np.ndarray = field(default_factory=lambda: np.full(2, 0.04))
+    finger_positions: np.ndarray = field(default_factory=lambda: np.full(NUM_FINGERS, FINGER_OPEN))
     scene: dict = field(default_factory=lambda: {"world": [], "attached": []})
     robot: dict = field(default_factory=lambda: {"name": "panda", "joints": list(ARM_JOINTS)})
     info: dict = field(default_factory=dict)

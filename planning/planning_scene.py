@@ -22,7 +22,7 @@ from pydrake.geometry import GeometryId
 from pydrake.math import RigidTransform
 from pydrake.planning import SceneGraphCollisionChecker
 
-from planning.config import PandaPlanningConfig, load_panda_config
+from planning.config import PandaPlanningConfig
 from planning.errors import ErrorCode, PlanningError
 from planning.model.panda import (
     ATTACHMENT_BODY,
@@ -43,13 +43,13 @@ class PlanningScene:
     or the plant's full 9 positions (7 arm joints, then the 2 fingers in m).
 
     Args:
-        config: the planning configuration; ``config/panda.yaml`` when None. Its ``table``
+        config: the planning configuration; ``PandaPlanningConfig()`` when None. Its ``table``
             becomes the world object "table".
         meshcat: when given, ``publish`` shows the scene there.
     """
 
     def __init__(self, config: PandaPlanningConfig | None = None, *, meshcat=None):
-        self._config = config if config is not None else load_panda_config()
+        self._config = config if config is not None else PandaPlanningConfig()
         model = build_panda_model(self._config.model, meshcat=meshcat)
         options = self._config.model
         self._checker = SceneGraphCollisionChecker(

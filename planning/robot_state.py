@@ -16,6 +16,7 @@ from pydrake.systems.framework import LeafSystem
 
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
+from planning.model.layout import NUM_POSITIONS, NUM_STATES
 from planning.search.ik import IkResult, IkSolver
 
 
@@ -37,22 +38,24 @@ class RobotStateReader(LeafSystem):
     is the pose of the end-effector frame E in the world frame W.
     """
 
-    def __init__(self, *, plant, frame, input_size: int = 18):
+    def __init__(self, *, plant, frame, input_size: int = NUM_STATES):
         super().__init__()
-        if input_size < 9:
-            raise ValueError(f"panda_state needs at least 9 values, got input_size={input_size}")
+        if input_size < NUM_POSITIONS:
+            raise ValueError(
+                f"panda_state needs at least {NUM_POSITIONS} values, got input_size={input_size}"
+            )
         self._plant = plant
         self._frame = frame
         self._plant_context = plant.CreateDefaultContext()
         self._input = self.DeclareVectorInputPort("panda_state", input_size)
-        self.DeclareVectorOutputPort("q", 9, self.CalcQ)
+        self.DeclareVectorOutputPort("q", NUM_POSITIONS, self.CalcQ)
         self.DeclareAbstractOutputPort("X_WE", lambda: Value(RigidTransform()), self.CalcPose)
 
     def CalcQ(self, context, output) -> None:
-        output.SetFromVector(self._input.Eval(context)[:9])
+        output.SetFromVector(self._input.Eval(context)[:NUM_POSITIONS])
 
     def CalcPose(self, context, output) -> None:
-        self._plant.SetPositions(self._plant_context, self._input.Eval(context)[:9])
+        self._plant.SetPositions(self._plant_context, self._input.Eval(context)[:NUM_POSITIONS])
         output.set_value(self._frame.CalcPoseInWorld(self._plant_context))
 
 

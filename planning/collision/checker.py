@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planning.model.layout import NUM_ARM_JOINTS
 from planning.paths import densify
 
 _SHORT_EDGE_STEPS = 12  # edges of at most this many steps are checked by Drake in one call
@@ -43,7 +44,7 @@ class CheckerAdapter:
         self._resolution = resolution
         self._proven: set[bytes] = set()  # edges found free at ``resolution``
         self._checker = scene.checker
-        self._template = scene.full_q(np.zeros(7))
+        self._template = scene.full_q(np.zeros(NUM_ARM_JOINTS))
         self._arm = scene.model.arm_indices
         idx = self._arm
         self.lower = scene.plant.GetPositionLowerLimits()[idx].copy()

@@ -24,6 +24,7 @@ from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import make_parser
 from planning.config import PandaModelConfig, TableConfig
 from planning.model.assets import panda_urdf, read_srdf
+from planning.model.layout import NUM_ARM_JOINTS
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 """The seven arm joints, base to flange."""
@@ -145,8 +146,8 @@ def build_panda_model(config: PandaModelConfig, *, meshcat=None) -> PandaModel:
     return PandaModel(
         diagram=builder.Build(),
         instance=instance,
-        arm_indices=np.array(indices[:7]),
-        finger_indices=np.array(indices[7:]),
+        arm_indices=np.array(indices[:NUM_ARM_JOINTS]),
+        finger_indices=np.array(indices[NUM_ARM_JOINTS:]),
         named_configurations=_named_configurations(config),
         config=config,
     )

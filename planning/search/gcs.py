@@ -27,6 +27,7 @@ import time
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
+from planning.model.layout import NUM_ARM_JOINTS
 from planning.paths import densify, drop_duplicates, path_length
 
 
@@ -110,7 +111,9 @@ class GcsPlanner:
         """
         t0 = time.perf_counter()
         deadline = float("inf") if deadline is None else deadline
-        q_start, q_goal = (np.asarray(q, dtype=float).reshape(7) for q in (q_start, q_goal))
+        q_start, q_goal = (
+            np.asarray(q, dtype=float).reshape(NUM_ARM_JOINTS) for q in (q_start, q_goal)
+        )
 
         def fail(message: str, repairs: int = 0) -> GcsResult:
             return GcsResult(False, None, message, time.perf_counter() - t0, repairs)
@@ -148,7 +151,7 @@ class GcsPlanner:
         to q by a collision-free straight edge, else None."""
         if any(r.PointInSet(q, 1e-9) for r in self._regions):
             return q
-        found = [r.Projection(q.reshape(7, 1)) for r in self._regions]
+        found = [r.Projection(q.reshape(NUM_ARM_JOINTS, 1)) for r in self._regions]
         distances = [np.inf if f is None else f[0][0] for f in found]
         for i in np.argsort(distances)[: self._options.connect_candidates]:
             if not np.isfinite(distances[i]):
@@ -165,7 +168,7 @@ class GcsPlanner:
         from pydrake.planning import GcsTrajectoryOptimization
 
         opts = self._options
-        gcs = GcsTrajectoryOptimization(7)
+        gcs = GcsTrajectoryOptimization(NUM_ARM_JOINTS)
         main = gcs.AddRegions(self._regions, opts.order)
         source = gcs.AddRegions([Point(q_a)], 0)
         target = gcs.AddRegions([Point(q_b)], 0)

@@ -27,6 +27,7 @@ from pydrake.solvers import Solve
 
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
+from planning.model.layout import NUM_ARM_JOINTS
 
 _REACH_MARGIN = 0.02  # m added to the computed reach bound
 _POSITION_COST = 1e3  # 1/m^2, weight of the squared position error (joint cost: 1e-2/rad^2)
@@ -189,7 +190,7 @@ class IkSolver:
     def _check_reach(self, frame, p_WE) -> None:
         """Raises NO_IK_SOLUTION at once when p_WE is beyond a conservative reach bound."""
         scene, plant = self._scene, self._scene.plant
-        plant.SetPositions(self._context, scene.full_q(np.zeros(7)))
+        plant.SetPositions(self._context, scene.full_q(np.zeros(NUM_ARM_JOINTS)))
         names = ["panda_link2", "panda_link4", "panda_link6", "panda_link7"]
         p = [
             plant.GetFrameByName(n, scene.model.instance)

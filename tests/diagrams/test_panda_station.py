@@ -11,14 +11,18 @@ from pydrake.systems.primitives import TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
 import diagrams.panda_station as mut
+from diagrams.pickplace_scenario import load_pickplace_scenario
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 from planning.model.panda import build_panda_model
 from planning.scene_objects import free_body_pose, free_body_positions
+
+SCENE = config_dir() / "pickplace.yaml"
 
 
 @pytest.fixture(scope="module")
 def config():
-    return mut.load_station_config()
+    return load_pickplace_scenario().station_config()
 
 
 @pytest.fixture(scope="module")
@@ -68,11 +72,11 @@ def test_bad_mode_and_values(config):
         mut.make_panda_station_diagram(bad)
 
 
-def test_unknown_key_rejected(tmp_path):
-    station = tmp_path / "station.yaml"
-    station.write_text("finger_force_limt: 70.0\n")
-    with pytest.raises(ConfigError):
-        mut.load_station_config(station)
+def test_unknown_station_key_rejected(tmp_path):
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text(f"scene_file: {SCENE}\nstation: {{finger_force_limt: 70.0}}\n")
+    with pytest.raises(ConfigError, match="station.finger_force_limt"):
+        load_pickplace_scenario(scenario)
 
 
 def test_free_body_positions_round_trip():

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
-from diagrams.panda_station import load_station_config
+from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.planning_station import make_planning_station
 from planning import ErrorCode, PlanningError
 from planning.interface import FINGER_OPEN
@@ -16,7 +16,7 @@ X_TARGET = RigidTransform(R_DOWN, [0.45, -0.25, 0.25])  # above the object
 
 @pytest.fixture(scope="module")
 def config():
-    return load_station_config()
+    return load_pickplace_scenario()
 
 
 @pytest.fixture

@@ -12,7 +12,7 @@ from planning.model import panda as mut
 
 @pytest.fixture(scope="module")
 def model():
-    return mut.build_panda_model(config_mod.load_panda_config().model)
+    return mut.build_panda_model(config_mod.PandaPlanningConfig().model)
 
 
 def test_urdf_is_cached_with_relative_converted_meshes():
@@ -74,7 +74,7 @@ def test_named_configurations(model):
 
 
 def test_default_config_has_a_table_with_top_at_zero():
-    table = config_mod.load_panda_config().table
+    table = config_mod.PandaPlanningConfig().table
     assert table.position[2] + table.size[2] / 2 == pytest.approx(0.0)
 
 
@@ -86,7 +86,7 @@ def test_default_config_has_a_table_with_top_at_zero():
         ("model: {finger_position: 0.5}", "finger_position"),
         ("table: {size: [1, 1], position: [0, 0, 0]}", "table"),
         ("ik: {time_budget: 0}", "time_budget"),
-        ("model: [", "yaml string"),
+        ("model: [", "malformed YAML at line 2"),
     ],
 )
 def test_bad_config_is_a_config_error(text, match):
@@ -118,7 +118,7 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
 
     from planning import PlanningScene
 
-    config = config_mod.load_panda_config()
+    config = config_mod.PandaPlanningConfig()
     config.table = None
     scene = PlanningScene(config)
     rng = np.random.default_rng(0)
@@ -149,10 +149,10 @@ def test_add_table_has_its_top_at_zero():
     from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
     from pydrake.systems.framework import DiagramBuilder
 
-    from planning.config import load_panda_config
+    from planning.config import PandaPlanningConfig
     from planning.model.panda import add_table
 
-    table = load_panda_config().table
+    table = PandaPlanningConfig().table
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
     add_table(plant, table)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import planning.task.pick_place as mut
-from diagrams.panda_station import load_station_config
+from diagrams.pickplace_scenario import load_pickplace_scenario
 from planning.io.scene_files import BoxSpec
 from planning.task.geometry import boxes_overlap
 from tests.pickplace_helpers import random_scene, run_task
@@ -16,7 +16,7 @@ STEPS = list(mut.STEPS)
 
 @pytest.fixture(scope="module")
 def config():
-    return load_station_config()
+    return load_pickplace_scenario()
 
 
 class ObstacleWatch:
