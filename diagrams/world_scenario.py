@@ -3,13 +3,12 @@ plant, the simulator and the visualiser are configured. Values live in ``config/
 
 import dataclasses as dc
 import math
-from pathlib import Path
 
-from pydrake.common.yaml import yaml_load_typed
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 from pydrake.visualization import VisualizationConfig
 
+from drake_sim.base.config import load_typed, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import resolve_uri
 
@@ -67,18 +66,8 @@ def load_scenario(filename, schema=WorldScenario, *, defaults=None, check=True):
     Raises:
         ConfigError: if the file cannot be read or parsed, or holds a bad value.
     """
-    path = Path(filename)
-    try:
-        text = path.read_text()
-    except OSError as e:
-        raise ConfigError(f"{filename}: cannot read scenario file ({e.strerror})") from None
-    try:
-        scenario = yaml_load_typed(
-            schema=schema, data=text, defaults=defaults if defaults is not None else schema()
-        )
-    except Exception as e:  # Drake raises RuntimeError/TypeError/ValueError/yaml errors.
-        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise ConfigError(f"{filename}: {first}") from None
+    text = read_text(filename, "scenario file")
+    scenario = load_typed(schema, data=text, defaults=defaults, where=str(filename))
     if check:
         check_world_scenario(scenario, str(filename))
     return scenario

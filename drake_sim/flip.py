@@ -12,11 +12,10 @@ import math
 import sys
 from pathlib import Path
 
-from pydrake.common.yaml import yaml_load_typed
 from pydrake.geometry import StartMeshcat
 
 from diagrams.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
-from drake_sim.base import cli
+from drake_sim.base import cli, config
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
@@ -58,23 +57,12 @@ def _parse_args(argv):
 
 
 def apply_overrides(scenario: FlipScenario, overrides: list[str]) -> FlipScenario:
-    """Applies ``KEY=VALUE`` overrides (dotted keys, YAML values) to a scenario.
+    """Applies ``KEY=VALUE`` overrides (dotted keys, YAML values) to a scenario and checks it.
 
     Raises:
         ConfigError: for a malformed override, an unknown key or a bad value.
     """
-    for item in overrides:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise ConfigError(f"--set {item!r}: expected KEY=VALUE")
-        text = value
-        for part in reversed(key.split(".")):
-            text = f"{{{part}: {text}}}"
-        try:
-            scenario = yaml_load_typed(schema=FlipScenario, data=text, defaults=scenario)
-        except Exception as e:  # Drake raises RuntimeError/ValueError/yaml errors.
-            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            raise ConfigError(f"--set {item!r}: {first}") from None
+    scenario = config.apply_overrides(FlipScenario, scenario, overrides)
     check_flip_scenario(scenario, "--set")
     return scenario
 

@@ -28,7 +28,6 @@ with ``repr`` precision, so a plan loads back equal.
 from __future__ import annotations
 
 import dataclasses as dc
-import functools
 import json
 import time
 from dataclasses import dataclass, field
@@ -294,7 +293,6 @@ class Plan:
             scene.finger_positions = saved
 
 
-@functools.cache
 def _panda_position_limits() -> tuple[np.ndarray, np.ndarray]:
     """The Panda URDF's arm joint limits (lower, upper), rad."""
     from pydrake.multibody.parsing import Parser

@@ -68,6 +68,9 @@ class PlanningScene:
         self._context = self._checker.MakeStandaloneModelContext()
         self._geometry_names: dict[GeometryId, str] = {}
         self.version = 0  # bumped by every change of objects, fingers or allowed pairs
+        # Sphere models of the robot in this scene, by cover slack (m); built on first use by
+        # planning.collision.sphere_checker.sphere_model and owned by the scene.
+        self.sphere_models: dict[float, object] = {}
         # The checker filters body pairs: declare the SRDF's pairs there too, so that shapes
         # added later (held objects on the attachment body) are filtered as well.
         for link_a, link_b in disabled_collision_pairs(options):

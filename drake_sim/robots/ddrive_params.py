@@ -11,8 +11,8 @@ import math
 from pathlib import Path
 
 import yaml
-from pydrake.common.yaml import yaml_load_typed
 
+from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 
 
@@ -157,27 +157,10 @@ def load_robot_params(filename: str | Path) -> RobotParams:
         ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
             that is not a finite positive number or gives an impossible robot.
     """
-    path = Path(filename)
     name = str(filename)
-    try:
-        text = path.read_text()
-    except OSError as e:
-        raise ConfigError(f"{name}: cannot read robot file ({e.strerror})") from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        first = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise ConfigError(f"{name}: malformed YAML ({first})") from None
-    _check_required(raw, name)
-    try:
-        params = yaml_load_typed(schema=RobotParams, data=text)
-    except (RuntimeError, TypeError, ValueError) as e:
-        raise ConfigError(f"{name}: {_first_line(e)}") from None
-    return validate(params, name)
-
-
-def _first_line(error: Exception) -> str:
-    return str(error).strip().splitlines()[0]
+    text = read_text(filename, "robot file")
+    _check_required(parse_yaml(text, name), name)
+    return validate(load_typed(RobotParams, data=text, where=name), name)
 
 
 def write_robot_params(params: RobotParams, filename: str | Path) -> None:

@@ -1,6 +1,6 @@
 """``SphereCheckerAdapter``: the ``CheckerAdapter`` interface answered by sphere models first.
 
-Each configuration is classified by ``_spheres.SphereCollisionModel``: FREE (the conservative
+Each configuration is classified by ``spheres.SphereCollisionModel``: FREE (the conservative
 outer spheres touch nothing, so Drake's checker agrees) and COLLIDING (inner balls overlap, so
 Drake's checker agrees) are final; only UNKNOWN configurations go to the scene's
 ``SceneGraphCollisionChecker``. So a configuration is accepted exactly when the sphere model
@@ -16,20 +16,18 @@ segments in one call (the batched RRT-Connect and the shortcutting use it).
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter, edge_key
 from planning.collision.spheres import FREE, UNKNOWN, SphereCollisionModel
 
-_MODELS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _SERIAL = 64  # at most this many configurations go to Drake one by one, more in parallel
 
 
 def sphere_model(scene, slack: float = 0.015) -> SphereCollisionModel:
-    """Returns the scene's sphere model (built once per scene and slack, then kept in sync)."""
-    models = _MODELS.setdefault(scene, {})
+    """Returns the scene's sphere model for ``slack``: built once, owned by the scene (its
+    ``sphere_models`` dict, so it lives and dies with the scene), then kept in sync with it."""
+    models = scene.sphere_models
     if slack not in models:
         models[slack] = SphereCollisionModel(scene, slack)
     return models[slack]

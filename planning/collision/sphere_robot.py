@@ -1,17 +1,19 @@
 """Sphere models of a robot's collision geometry and of held objects, cached on disk.
 
-``robot_spheres`` covers every collision geometry of the given bodies (``_sphere_cover``) and
+``robot_spheres`` covers every collision geometry of the given bodies (``sphere_cover``) and
 returns the spheres in each body's frame. Drake checks a ``Convex`` or ``Mesh`` as the convex
 hull of its vertices, so that hull (``Shape.GetConvexHull``) is what is covered; boxes are
 covered as polytopes, cylinders through a circumscribed prism, spheres are kept as they are.
 Covers are written to ``cache_dir()/spheres/<hash>.npz``, the hash taken over the covered
-polytopes, their poses and the cover parameters, so a changed mesh or option regenerates them.
+polytopes, their poses, the cover parameters and the cover code itself, so a changed mesh,
+option or algorithm regenerates them.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Box, Convex, Cylinder, Mesh, Sphere
@@ -25,10 +27,14 @@ from planning.collision.sphere_cover import (
     cylinder_polytope,
 )
 
-_VERSION = "2"  # bump when the cover algorithm changes its output
 SPACING = 0.01  # m, grid of candidate centres and coarse samples
 DENSE_SPACING = 0.002  # m, boundary grid that sets the final radii (eps <= 1.2 mm)
 _CELLS = 15  # grid cells along the largest extent of a held object, at most
+# The cover algorithm's code (this module and sphere_cover): part of every cache key, so a change
+# of the algorithm builds new covers without a hand-bumped version.
+_COVER_CODE = b"".join(
+    (Path(__file__).parent / name).read_bytes() for name in ("sphere_robot.py", "sphere_cover.py")
+)
 
 
 def shape_polytope(shape):
@@ -92,7 +98,8 @@ def robot_spheres(plant, inspector, bodies, slack: float) -> dict[int, SphereSet
         NotImplementedError: a geometry has a shape without a cover.
     """
     items = []  # (body, shape, X_BG)
-    digest = hashlib.sha256(f"{_VERSION} {slack} {SPACING} {DENSE_SPACING}".encode())
+    digest = hashlib.sha256(_COVER_CODE)  # the cover algorithm itself is an input
+    digest.update(f"{slack} {SPACING} {DENSE_SPACING}".encode())
     for body in bodies:
         for g in plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(body))):
             shape, X_BG = inspector.GetShape(g), inspector.GetPoseInFrame(g)

@@ -27,7 +27,6 @@ from drake_sim.base.resources import cache_dir
 _DISTRIBUTION = "example-robot-data"
 _DESCRIPTION = "cmeel.prefix/share/example-robot-data/robots/panda_description"
 _PACKAGE_PREFIX = "package://example-robot-data/robots/panda_description/"
-_CONVERTER_VERSION = "4"  # Bump when the conversion below changes its output.
 
 COLLISION_GEOMETRIES = ("convex_mesh", "primitives")
 """``convex_mesh``: the URDF's STL collision meshes, declared convex to Drake (each is a
@@ -86,10 +85,8 @@ def read_srdf(path: Path | None = None) -> SrdfInfo:
 def _hash_inputs(description: Path, collision_geometry: str) -> str:
     import trimesh
 
-    digest = hashlib.sha256()
-    digest.update(
-        f"{_CONVERTER_VERSION} trimesh {trimesh.__version__} {collision_geometry}\0".encode()
-    )
+    digest = hashlib.sha256(Path(__file__).read_bytes())  # the converter's own code
+    digest.update(f"trimesh {trimesh.__version__} {collision_geometry}\0".encode())
     for path in sorted((description / "urdf").glob("*.urdf")) + sorted(
         (description / "meshes").rglob("*")
     ):

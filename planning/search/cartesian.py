@@ -62,7 +62,7 @@ def cartesian_path(
 
     Args:
         scene: the ``PlanningScene``.
-        adapter: ``_rrt.CheckerAdapter`` on the scene.
+        adapter: ``planning.collision.checker.CheckerAdapter`` on the scene.
         frame: the moving frame E (a plant frame of the Panda).
         q_start: 7 arm joints, rad, collision-free.
         X_WG: goal pose of E in W.

@@ -38,7 +38,7 @@ def rrt_connect_batch(
     """Plans a collision-free path with batched RRT-Connect; both ends must be free.
 
     Args:
-        adapter: collision queries with ``free_prefixes`` (``_rrt.CheckerAdapter``).
+        adapter: collision queries with ``free_prefixes`` (``checker.CheckerAdapter``).
         q_start, q_goal: the 7 arm joints at either end, rad.
         step: largest extension of a tree per step, rad (joint-space L2).
         goal_bias: probability of a target being the other tree's root.

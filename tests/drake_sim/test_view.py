@@ -61,11 +61,11 @@ def test_bad_robot_file_is_one_line_and_exit_2(tmp_path, edit, needle):
     )
 
 
-def test_malformed_or_missingedited_robot_file(tmp_path):
+def test_malformed_or_missing_robot_file(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("body: {length: [")
     assert_bad_input(_run("--robot", str(bad)), "malformed")
-    assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "cannot read")
+    assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "no such robot file")
 
 
 @pytest.mark.parametrize(

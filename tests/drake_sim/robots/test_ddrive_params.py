@@ -86,7 +86,7 @@ def test_malformed_files(tmp_path, text):
 
 
 def test_missing_file(tmp_path):
-    with pytest.raises(ConfigError, match="cannot read"):
+    with pytest.raises(ConfigError, match="no such robot file"):
         mut.load_robot_params(tmp_path / "nope.yaml")
 
 
