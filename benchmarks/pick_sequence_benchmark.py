@@ -2,10 +2,12 @@
 
     python benchmarks/pick_sequence_benchmark.py [--scene config/pickplace.yaml] [--repeats 5]
 
-On the pick-and-place scene: ready -> pre-grasp (pose goal 12 cm above the grasp, hand down)
--> grasp (Cartesian down, fingers ``PickPlaceOptions.grasp_depth`` below the object's top) ->
-the object attached -> lift (Cartesian, 15 cm up) -> pre-place over the obstacle (pose goal
-15 cm above the place) -> place (Cartesian down, the object 5 mm above its target). Each
+The motions of ``PickPlaceTask``'s steps, under the same names, on the pick-and-place scene:
+ready -> ``move_above_object`` (pose goal 12 cm above the grasp, hand down) -> ``approach``
+(Cartesian down, fingers ``PickPlaceOptions.grasp_depth`` below the object's top) -> the object
+attached -> ``lift`` (Cartesian, 15 cm up) -> ``move_to_place`` in two motions: ``above`` (pose
+goal 15 cm above the place, over the obstacle) and ``down`` (Cartesian, the object 5 mm above
+its target). Each
 repeat uses a fresh ``MotionPlanner`` on a freshly loaded scene. Prints each step's planning
 time (median over the repeats) and the median total; exit code 1 when a step fails.
 """
@@ -19,11 +21,10 @@ import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
 from drake_sim.base.resources import config_dir
-from planning import MotionPlanner, PlanningScene
-from planning.task.pick_place import PickPlaceOptions
+from planning import MotionPlanner, PickPlaceOptions, PlanningScene
 
 R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # the hand's z axis along -z_W
-STEPS = ("pre-grasp", "grasp", "lift", "pre-place", "place")
+STEPS = ("move_above_object", "approach", "lift", "move_to_place above", "move_to_place down")
 
 
 def plan_sequence(scene: PlanningScene) -> dict[str, float]:
@@ -49,12 +50,12 @@ def plan_sequence(scene: PlanningScene) -> dict[str, float]:
     def above(p, height):
         return RigidTransform(R_DOWN, p + [0.0, 0.0, height])
 
-    run("pre-grasp", planner.plan_to_pose, above(p_WO, offset + 0.12))
-    run("grasp", planner.plan_cartesian, above(p_WO, offset))
+    run("move_above_object", planner.plan_to_pose, above(p_WO, offset + 0.12))
+    run("approach", planner.plan_cartesian, above(p_WO, offset))
     scene.attach("object", q)
     run("lift", planner.plan_cartesian, above(p_WO, offset + 0.15))
-    run("pre-place", planner.plan_to_pose, above(p_place, offset + 0.15))
-    run("place", planner.plan_cartesian, above(p_place, offset + 0.005))
+    run("move_to_place above", planner.plan_to_pose, above(p_place, offset + 0.15))
+    run("move_to_place down", planner.plan_cartesian, above(p_place, offset + 0.005))
     return times
 
 
@@ -73,10 +74,10 @@ def main(argv=None) -> int:
             print(f"failed: {e}", file=sys.stderr)
             return 1
     for name in STEPS:
-        print(f"{name:10s} {statistics.median(r[name] for r in rows) * 1e3:7.1f} ms")
+        print(f"{name:20s} {statistics.median(r[name] for r in rows) * 1e3:7.1f} ms")
     totals = [sum(r.values()) for r in rows]
     print(
-        f"total      {statistics.median(totals) * 1e3:7.1f} ms median of {len(rows)} "
+        f"{'total':20s} {statistics.median(totals) * 1e3:7.1f} ms median of {len(rows)} "
         f"(min {min(totals) * 1e3:.1f}, max {max(totals) * 1e3:.1f})"
     )
     return 0

@@ -5,9 +5,8 @@ from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams
 from pydrake.multibody.meshcat import JointSliders
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.visualization import AddFrameTriadIllustration
 
-from diagrams.ddrive_world import ROBOT_NAME, robot_start_pose
+from diagrams.ddrive_world import ROBOT_NAME, add_link_frames, robot_start_pose
 from diagrams.world_scenario import PlanarPose
 from drake_sim.robots.ddrive import BODY_LINK, add_robot
 from drake_sim.robots.ddrive_params import RobotParams
@@ -41,16 +40,7 @@ def make_ddrive_model_diagram(
         robot_start_pose(PlanarPose(), robot),
     )
     plant.Finalize()
-    if frame_triad_length > 0:
-        for index in plant.GetBodyIndices(instance):
-            link = plant.get_body(index)
-            if not link.name().endswith("caster"):
-                AddFrameTriadIllustration(
-                    scene_graph=scene_graph,
-                    body=link,
-                    length=frame_triad_length,
-                    radius=frame_triad_length / 40,
-                )
+    add_link_frames(plant, scene_graph, instance, frame_triad_length)
     if meshcat is not None:
         MeshcatVisualizer.AddToBuilder(
             builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)

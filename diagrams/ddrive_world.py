@@ -90,17 +90,21 @@ def add_ddrive_world(
     plant.Finalize()
     body = plant.GetBodyByName(BODY_LINK, instance)
     plant.SetDefaultFloatingBaseBodyPose(body, robot_start_pose(scenario.robot_pose, robot))
-    if scenario.frame_triad_length > 0:
-        for index in plant.GetBodyIndices(instance):
-            link = plant.get_body(index)
-            if not link.name().endswith("caster"):
-                AddFrameTriadIllustration(
-                    scene_graph=scene_graph,
-                    body=link,
-                    length=scenario.frame_triad_length,
-                    radius=scenario.frame_triad_length / 40,
-                )
+    add_link_frames(plant, scene_graph, instance, scenario.frame_triad_length)
     return DdriveWorld(plant=plant, scene_graph=scene_graph, robot=instance)
+
+
+def add_link_frames(plant, scene_graph, instance, length: float) -> None:
+    """Draws a frame triad of ``length`` m on every link of the robot but its casters (RViz's
+    TF display); nothing when ``length`` is 0."""
+    if length <= 0:
+        return
+    for index in plant.GetBodyIndices(instance):
+        link = plant.get_body(index)
+        if not link.name().endswith("caster"):
+            AddFrameTriadIllustration(
+                scene_graph=scene_graph, body=link, length=length, radius=length / 40
+            )
 
 
 def make_ddrive_world_diagram(

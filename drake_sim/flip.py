@@ -3,7 +3,7 @@
 With a viewer (the default) it runs in real time in Meshcat, drawing the robot, its odometry
 trail and its true trail, until Ctrl-C or ``--duration``. ``--headless`` runs flat out for 20 s
 (or ``--duration``). ``--teleop`` turns the flip controller off: drive with the W/A/S/D keys
-and Space to stop, in the Meshcat page. ``--report`` writes the JSON report (DESIGN.md).
+and Space to stop, in the Meshcat page. ``--report`` writes the JSON report (README, Reports).
 Exit codes: 0 for a completed run, 1 if the simulation failed, 2 for bad input.
 """
 

@@ -18,7 +18,7 @@ from drake_sim.systems.control.flip_controller import STATUS_FIELDS, FlipMode
 
 @dc.dataclass
 class FlipReport:
-    """What a run did. Distances in m, times in s. See DESIGN.md for the contract."""
+    """What a run did. Distances in m, times in s. The keys are the README's (Reports)."""
 
     flips: int  # Completed half-turns over the axle.
     failed_flips: int  # Attempts that fell back or timed out (each then recovered or not).

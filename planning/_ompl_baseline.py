@@ -11,9 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter
+from planning.model.layout import NUM_ARM_JOINTS
 
 
 def ompl_available() -> bool:
+    """True when the ``ompl`` wheel (the ``bench`` extra) is installed."""
     try:
         import ompl  # noqa: F401
     except ImportError:
@@ -36,17 +38,17 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
     from ompl import geometric as og
 
     adapter = CheckerAdapter(scene)
-    space = ob.RealVectorStateSpace(7)
-    bounds = ob.RealVectorBounds(7)
-    for i in range(7):
+    space = ob.RealVectorStateSpace(NUM_ARM_JOINTS)
+    bounds = ob.RealVectorBounds(NUM_ARM_JOINTS)
+    for i in range(NUM_ARM_JOINTS):
         bounds.setLow(i, float(adapter.lower[i]))
         bounds.setHigh(i, float(adapter.upper[i]))
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
-    q = np.empty(7)
+    q = np.empty(NUM_ARM_JOINTS)
 
     def valid(state) -> bool:
-        for i in range(7):
+        for i in range(NUM_ARM_JOINTS):
             q[i] = state[i]
         return adapter.config_free(q)
 
@@ -54,7 +56,7 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
     step = scene.checker.edge_step_size()
     setup.getSpaceInformation().setStateValidityCheckingResolution(step / space.getMaximumExtent())
     start, goal = space.allocState(), space.allocState()
-    for i in range(7):
+    for i in range(NUM_ARM_JOINTS):
         start[i] = float(q_start[i])
         goal[i] = float(q_goal[i])
     setup.setStartAndGoalStates(start, goal)
@@ -65,4 +67,6 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
     if simplify:
         setup.simplifySolution(max(0.1, timeout - setup.getLastPlanComputationTime()))
     path = setup.getSolutionPath()
-    return np.array([[path.getState(k)[i] for i in range(7)] for k in range(path.getStateCount())])
+    return np.array(
+        [[path.getState(k)[i] for i in range(NUM_ARM_JOINTS)] for k in range(path.getStateCount())]
+    )

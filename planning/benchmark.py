@@ -1,13 +1,14 @@
 """``python -m planning.benchmark``: MotionPlanner on the MotionBenchMaker Panda problems.
 
-Usage (DESIGN.md, "python -m planning.benchmark")::
+Usage::
 
-    python -m planning.benchmark --dataset ../shared/benchmarks/mbm_panda --limit 5 \\
-        --timeout 5 --report report.json [--families box_panda cage_panda] [--compare-ompl] \\
-        [--plot times.png]
+    python -m planning.benchmark [--dataset PATH] --limit 5 --timeout 5 --report report.json \\
+        [--families box_panda cage_panda] [--compare-ompl] [--plot times.png]
 
 ``--dataset`` is a ``problems`` folder, a folder holding ``problems.tar.bz2`` (unpacked once into
-the cache) or the archive itself. For each problem the scene is loaded, the fingers are set to the
+the cache) or the archive itself; by default the repository's own copy,
+``benchmarks/data/mbm_panda`` (``planning.io.mbm.default_dataset``; its README.md says where the
+problems come from). For each problem the scene is loaded, the fingers are set to the
 request's positions, and the start and goal are checked (``valid``: in limits and collision-free
 under our model); valid problems are planned with ``MotionPlanner.plan_path`` (the checks and the
 search of ``plan_to_joints``, without the time parametrisation) and timed from request to
@@ -18,7 +19,8 @@ with ``--compare-ompl`` also ``ompl_success``, ``ompl_time_s``, ``ompl_path_leng
 ``ompl_path_valid_fine`` (OMPL RRTConnect plus simplification on the same checker).
 ``--plot FILE`` writes a PNG with histograms of the times per problem (log scale), ours and
 OMPL's. A progress bar (tqdm, when installed) runs on stderr. Paths are re-checked with Drake's
-checker alone (``_rrt.CheckerAdapter``), whatever collision model the planner used.
+checker alone (``planning.collision.checker.CheckerAdapter``), whatever collision model the
+planner used.
 Exit code 0 when the run completed, 2 on bad input.
 """
 
@@ -37,7 +39,7 @@ from planning._ompl_baseline import ompl_available, ompl_plan
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import PlanningError
 from planning.io import mbm
-from planning.motion_planner import MotionPlanner, load_planner_options
+from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
 from planning.paths import path_length
 from planning.planning_scene import PlanningScene
 
@@ -172,9 +174,18 @@ def _stats(group: list[dict], compare: bool) -> str:
 
 
 def main(argv=None) -> int:
-    default = Path(__file__).resolve().parent.parent.parent / "shared/benchmarks/mbm_panda"
-    parser = argparse.ArgumentParser(prog="python -m planning.benchmark", description=__doc__)
-    parser.add_argument("--dataset", type=Path, default=default)
+    parser = argparse.ArgumentParser(
+        prog="python -m planning.benchmark",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--dataset",
+        type=Path,
+        default=None,
+        help="problems folder, folder with problems.tar.bz2, or the archive "
+        "(default: the repository's benchmarks/data/mbm_panda)",
+    )
     parser.add_argument("--families", nargs="+", default=list(mbm.FAMILIES))
     parser.add_argument("--limit", type=int, default=None, help="first N problems per family")
     parser.add_argument("--timeout", type=float, default=5.0, help="s per problem")
@@ -195,8 +206,8 @@ def main(argv=None) -> int:
         print("--compare-ompl needs the ompl package (pip install ompl)", file=sys.stderr)
         return 2
     try:
-        folder = problems_folder(args.dataset)
-        options = load_planner_options(args.options)
+        folder = problems_folder(args.dataset or mbm.default_dataset())
+        options = load_planner_options(args.options) if args.options else MotionPlannerOptions()
     except (FileNotFoundError, RuntimeError, ValueError) as e:
         print(str(e).splitlines()[0], file=sys.stderr)
         return 2

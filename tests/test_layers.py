@@ -1,4 +1,4 @@
-"""The layers of DESIGN.md hold: no module imports one from a layer to its right.
+"""The layers hold (README, Layout): no module imports one from a layer to its right.
 
 Every module of ``drake_sim``, ``planning`` and ``diagrams`` is parsed (``ast``, imports inside
 functions included) and given a layer by the longest matching prefix below; an import of a

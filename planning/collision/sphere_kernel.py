@@ -21,10 +21,14 @@ Compiled once per machine (``cache=True`` keeps the machine code beside this fil
 numba's cache folder when that is read-only): the first call in a fresh install takes about
 10 s, later processes load it in ~0.5 s. One entry point (``prefixes``; ``transforms`` for
 kinematics alone) keeps that short: each compiled entry point costs its own optimisation.
+``announce_compile`` says so on stderr, once per process, when that compile is about to happen.
 """
 
 from __future__ import annotations
 
+import os
+import sys
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -333,3 +337,51 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
                 unknown_local[n_unknown] = i
                 n_unknown += 1
     return first, n, unknown_edge[:n_unknown], unknown_local[:n_unknown]
+
+
+# ------------------------------------------------------------------- compile note ----
+COMPILE_NOTE = "note: compiling the collision kernel once for this machine (about 10 s)..."
+_announce_lock = threading.Lock()
+_announce_done = False  # announce_compile has looked, in this process
+
+
+def cache_is_cold(dispatcher=None) -> bool:
+    """True when the next call of ``dispatcher`` (``prefixes`` when None) compiles it: it is not
+    compiled in this process yet and numba's on-disk cache has no entry for this machine and
+    this source (no index file, a stale one, no key with this CPU and bytecode, or its data file
+    gone). False when that cannot be told (caching off, numba's internals changed)."""
+    dispatcher = prefixes if dispatcher is None else dispatcher
+    try:
+        if dispatcher.signatures:
+            return False
+        cache = dispatcher._cache
+        files = cache._cache_file
+        # Keys are (signature, machine, bytecode hashes); the signature is only known at the call.
+        wanted = cache._index_key(None, dispatcher.targetctx.codegen())[1:]
+        entries = files._load_index().items()  # {} when missing or stale
+        return not any(
+            key[1:] == wanted and os.path.isfile(files._data_path(name)) for key, name in entries
+        )
+    except Exception:
+        return False
+
+
+def announce_compile() -> bool:
+    """Prints ``COMPILE_NOTE`` on stderr when ``prefixes`` is about to be compiled
+    (``cache_is_cold``), at most once per process; only the first call looks at the cache,
+    later calls return at once. Call it just before calling ``prefixes``.
+
+    Returns:
+        True when it printed the note.
+    """
+    global _announce_done
+    if _announce_done:
+        return False
+    with _announce_lock:
+        if _announce_done:
+            return False
+        _announce_done = True
+        if not cache_is_cold():
+            return False
+    print(COMPILE_NOTE, file=sys.stderr, flush=True)
+    return True

@@ -1,10 +1,10 @@
 """Fast collision checks of many Panda configurations with sphere models.
 
 The robot's collision geometry (arm links, hand, fingers at the scene's finger positions, and
-held objects) is covered by spheres (``_sphere_robot``); world objects stay exact boxes,
+held objects) is covered by spheres (``sphere_robot``); world objects stay exact boxes,
 cylinders and spheres. ``SphereCollisionModel.classify`` runs forward kinematics for each
 configuration, then exact point-to-primitive distances (and sphere pair distances for
-self-collision), in compiled loops (``_sphere_kernel``), and sorts each configuration into:
+self-collision), in compiled loops (``sphere_kernel``), and sorts each configuration into:
 
 - ``FREE``: no outer sphere is within its pair's padding of anything. The outer spheres
   contain the robot's geometry, so Drake's checker finds it collision-free too.
@@ -36,6 +36,7 @@ from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
 from planning.collision.sphere_robot import cover_shape, robot_spheres
+from planning.model.layout import NUM_ARM_JOINTS
 from planning.model.panda import ATTACHMENT_BODY
 
 __all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
@@ -48,7 +49,7 @@ class SphereCollisionModel:
 
     Args:
         scene: the planning scene.
-        slack: the sphere cover's slack, m (see ``_sphere_cover.cover_polytope``).
+        slack: the sphere cover's slack, m (see ``sphere_cover.cover_polytope``).
 
     Attributes:
         supported: False when some geometry has no sphere model or exact formula; then
@@ -78,7 +79,8 @@ class SphereCollisionModel:
         except NotImplementedError:
             self.supported = False
         self.sync()
-        self.classify(np.zeros((1, 7)))  # compiles or loads the kernel now, not mid-request
+        # Compiles or loads the kernel now, not mid-request.
+        self.classify(np.zeros((1, NUM_ARM_JOINTS)))
 
     # ---------------------------------------------------------------------------- scene ----
     def sync(self) -> None:
@@ -98,7 +100,7 @@ class SphereCollisionModel:
         if signature == self._signature:
             return
         self._signature = signature
-        self._template = scene.full_q(np.zeros(7))
+        self._template = scene.full_q(np.zeros(NUM_ARM_JOINTS))
         self._arm = scene.model.arm_indices
         self._objects_ok = all(o.shape in ("box", "cylinder", "sphere") for o in world.values())
         self._objects_ok &= all(o.shape in ("box", "cylinder", "sphere") for o in held.values())
@@ -279,6 +281,7 @@ class SphereCollisionModel:
         qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
         state = np.full(len(qs), UNKNOWN, dtype=np.int8)
         if self.active:  # each configuration as a segment from itself to itself: one sample
+            _kernel.announce_compile()  # on stderr, once, when the kernel's first call compiles
             first, _, unknown, _ = _kernel.prefixes(qs, qs, 1.0, False, self._data)
             state[:] = np.where(first == 0, COLLIDING, FREE)
             state[unknown] = UNKNOWN
@@ -286,10 +289,11 @@ class SphereCollisionModel:
 
     def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
         """Classifies samples of segments from their starts up to their first blocking one;
-        see ``_sphere_kernel.prefixes``. Without a sphere model every sample is UNKNOWN."""
+        see ``sphere_kernel.prefixes``. Without a sphere model every sample is UNKNOWN."""
         q_a = np.ascontiguousarray(np.atleast_2d(q_a), dtype=float)
         q_b = np.ascontiguousarray(np.atleast_2d(q_b), dtype=float)
         if self.active:
+            _kernel.announce_compile()
             return _kernel.prefixes(q_a, q_b, float(step), stop_at_unknown, self._data)
         n = np.maximum(1, np.ceil(np.linalg.norm(q_b - q_a, axis=1) / step).astype(np.int64))
         if stop_at_unknown:

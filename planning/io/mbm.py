@@ -2,12 +2,15 @@
 
 A problem folder (``problems/<family>/``) holds ``sceneNNNN.yaml`` (a MoveIt PlanningScene) and
 ``requestNNNN.yaml`` (a MoveIt MotionPlanRequest with a start state and one joint-space goal).
-See ``../shared/benchmarks/mbm_panda/README.md``.
+The repository ships the 700 problems as ``benchmarks/data/mbm_panda/problems.tar.bz2``
+(``default_dataset``); that folder's README.md says where they come from.
 """
 
 from __future__ import annotations
 
+import shutil
 import tarfile
+import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +29,10 @@ FAMILIES = (
     "bookshelf_thin_panda",
     "cage_panda",
 )
+
+# The checkout's root, found as drake_sim.base.resources finds models/ and config/: the data is
+# not part of the installed packages, so the project is installed from its checkout (-e).
+_ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -54,14 +61,43 @@ class MbmRequest:
     q_goal: np.ndarray
 
 
+def default_dataset() -> Path:
+    """Returns the repository's copy of the problems, the folder ``benchmarks/data/mbm_panda``
+    holding ``problems.tar.bz2`` (the default of ``python -m planning.benchmark``).
+
+    Raises:
+        FileNotFoundError: the archive is not there (the project is not run from its checkout).
+    """
+    folder = _ROOT / "benchmarks" / "data" / "mbm_panda"
+    if not (folder / "problems.tar.bz2").is_file():
+        raise FileNotFoundError(
+            f"MBM problems not found (looked for {folder / 'problems.tar.bz2'}); "
+            "install the project with `pip install -e .` from its checkout"
+        )
+    return folder
+
+
 def unpack(archive: Path | str, destination: Path | str) -> Path:
-    """Unpacks ``problems.tar.bz2`` into ``destination`` (once) and returns its problems folder."""
+    """Unpacks ``problems.tar.bz2`` into ``destination`` (once) and returns its problems folder.
+
+    The archive is unpacked beside the folder and renamed into place, so processes running at
+    the same time never see a half-unpacked folder."""
     destination = Path(destination)
     folder = destination / "problems"
-    if not (folder / FAMILIES[0]).is_dir():
-        destination.mkdir(parents=True, exist_ok=True)
+    if (folder / FAMILIES[0]).is_dir():
+        return folder
+    destination.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=".unpacking-", dir=destination))
+    try:
         with tarfile.open(archive, "r:bz2") as tar:
-            tar.extractall(destination, filter="data")
+            tar.extractall(scratch, filter="data")
+        try:
+            (scratch / "problems").rename(folder)
+        except OSError:  # another process put it there first
+            if not (folder / FAMILIES[0]).is_dir():
+                raise
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
     return folder
 
 

@@ -1,6 +1,6 @@
 """Loading and saving planning scenes: our pick-and-place YAML and MoveIt's PlanningScene YAML.
 
-Our format (DESIGN.md "Pick-and-place scene"; world frame, metres, box centres)::
+Our format (``config/pickplace.yaml``; world frame, metres, box centres)::
 
     table:    {size: [sx, sy, sz], position: [x, y, z]}
     object:   {size: [sx, sy, sz], position: [x, y, z], mass: kg, yaw: rad}
@@ -26,6 +26,8 @@ from pathlib import Path
 
 import yaml
 
+from drake_sim.base.config import load_typed
+from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
 from planning.scene_objects import SceneObject, make_pose
 
@@ -76,13 +78,10 @@ def load_scene_yaml(scene, filename: Path | str) -> None:
     Raises:
         PlanningError: INVALID_SCENE for a malformed file or bad values, naming the file.
     """
-    from pydrake.common.yaml import yaml_load_typed
-
-    filename = Path(filename)
     try:
-        spec = yaml_load_typed(schema=SceneFile, filename=str(filename))
-    except (yaml.YAMLError, RuntimeError, ValueError, TypeError, AttributeError) as e:
-        raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
+        spec = load_typed(SceneFile, filename=filename)
+    except ConfigError as e:
+        raise PlanningError(ErrorCode.INVALID_SCENE, str(e)) from None
     apply_scene_file(scene, spec, where=str(filename))
 
 

@@ -64,7 +64,8 @@ class StepReport:
 
 @dc.dataclass
 class TaskReport:
-    """The task's outcome; ``to_dict`` gives DESIGN.md's report keys."""
+    """The task's outcome; ``to_dict`` gives the report keys of ``python -m drake_sim.pickplace
+    --report`` (README, Reports)."""
 
     success: bool = False
     impossible: bool = False

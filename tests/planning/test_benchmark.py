@@ -8,20 +8,16 @@ import pytest
 
 import planning.benchmark as mut
 from planning import PlanningScene
+from planning.io import mbm
 
-DATASET = Path(__file__).resolve().parents[2] / "shared/benchmarks/mbm_panda"
-needs_dataset = pytest.mark.skipif(
-    not (DATASET / "problems.tar.bz2").is_file(), reason="MBM dataset not found"
-)
+DATASET = mbm.default_dataset()  # the repository's copy: benchmarks/data/mbm_panda
 
 
-@needs_dataset
 def test_one_problem_report(tmp_path, capsys):
     report = tmp_path / "report.json"
+    # No --dataset: the repository's own copy is the default.
     code = mut.main(
         [
-            "--dataset",
-            str(DATASET),
             "--families",
             "box_panda",
             "--limit",
@@ -54,8 +50,6 @@ def test_one_problem_report(tmp_path, capsys):
     folder = mut.problems_folder(DATASET)
     scene = PlanningScene()
     scene.load_moveit(folder / "box_panda/scene0001.yaml")
-    from planning.io import mbm
-
     request = mbm.load_request(folder / "box_panda/request0001.yaml")
     scene.finger_positions = request.q_start[7:]
     np.testing.assert_allclose(path[0], request.q_start[:7])
@@ -64,6 +58,27 @@ def test_one_problem_report(tmp_path, capsys):
         n = int(np.ceil(np.linalg.norm(b - a) / 0.01))
         assert all(scene.is_collision_free(a + s * (b - a)) for s in np.linspace(0, 1, n + 1))
     assert "box_panda" in capsys.readouterr().out
+
+
+def test_dataset_may_be_the_archive_its_folder_or_the_problems(tmp_path):
+    archive = DATASET / "problems.tar.bz2"
+    assert DATASET.is_relative_to(Path(mut.__file__).resolve().parents[1])  # inside the checkout
+    folder = mut.problems_folder(DATASET)
+    assert (folder / "box_panda" / "scene0001.yaml").is_file()
+    assert mut.problems_folder(archive) == folder
+    assert mut.problems_folder(folder) == folder
+    assert mut.problems_folder(folder.parent) == folder
+    with pytest.raises(FileNotFoundError):
+        mut.problems_folder(tmp_path)
+
+
+def test_default_dataset_missing_exits_2(monkeypatch, capsys):
+    def missing():
+        raise FileNotFoundError("MBM problems not found")
+
+    monkeypatch.setattr(mut.mbm, "default_dataset", missing)
+    assert mut.main(["--limit", "1"]) == 2
+    assert "MBM problems not found" in capsys.readouterr().err
 
 
 def test_bad_arguments_exit_2(capsys):

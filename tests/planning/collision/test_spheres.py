@@ -2,8 +2,6 @@
 Drake's, the spheres cover every collision mesh, their verdicts agree with Drake's checker in MBM
 and pick-and-place scenes, and scene changes made at run time are seen."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform
@@ -16,11 +14,9 @@ from planning.collision.checker import CheckerAdapter
 from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.collision.sphere_cover import box_polytope, cover_polytope, cylinder_polytope
 from planning.collision.sphere_robot import shape_polytope
+from planning.io.mbm import default_dataset
 
-DATASET = Path(__file__).resolve().parents[2] / "shared/benchmarks/mbm_panda"
-needs_dataset = pytest.mark.skipif(
-    not (DATASET / "problems.tar.bz2").is_file(), reason="MBM dataset not found"
-)
+DATASET = default_dataset()  # the repository's copy: benchmarks/data/mbm_panda
 
 
 @pytest.fixture(scope="module")
@@ -123,7 +119,6 @@ def check_agreement(scene, qs):
     np.testing.assert_array_equal(SphereCheckerAdapter(scene).configs_free(qs), free)
 
 
-@needs_dataset
 def test_agrees_with_drake_in_mbm_scenes(scene, dut):
     from planning.benchmark import problems_folder
     from planning.io import mbm

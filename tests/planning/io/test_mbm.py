@@ -11,15 +11,10 @@ import planning as mut
 from drake_sim.base.resources import cache_dir
 from planning.io import mbm
 
-DATASET = Path(__file__).resolve().parent.parent.parent / "shared" / "benchmarks" / "mbm_panda"
-
 
 @pytest.fixture(scope="module")
 def problems_dir():
-    archive = DATASET / "problems.tar.bz2"
-    if not archive.is_file():
-        pytest.skip(f"MBM dataset not found at {archive}")
-    return mbm.unpack(archive, cache_dir() / "mbm_panda")
+    return mbm.unpack(mbm.default_dataset() / "problems.tar.bz2", cache_dir() / "mbm_panda")
 
 
 @pytest.fixture(scope="module")
@@ -78,6 +73,25 @@ def test_request_reading(problems_dir):
     request = mbm.load_request(problem.request_file)
     assert request.q_start.shape == (9,) and request.q_goal.shape == (9,)
     np.testing.assert_array_equal(request.q_goal[7:], request.q_start[7:])
+
+
+def test_default_dataset_is_the_repository_copy():
+    folder = mbm.default_dataset()
+    root = Path(mbm.__file__).resolve().parents[2]
+    assert folder == root / "benchmarks" / "data" / "mbm_panda"
+    assert (folder / "problems.tar.bz2").is_file() and (folder / "README.md").is_file()
+
+
+def test_unpack_once_into_a_fresh_folder(tmp_path):
+    archive = mbm.default_dataset() / "problems.tar.bz2"
+    folder = mbm.unpack(archive, tmp_path)
+    assert folder == tmp_path / "problems"
+    assert sorted(p.name for p in folder.iterdir()) == sorted(mbm.FAMILIES)
+    assert len(list(folder.glob("*/scene*.yaml"))) == 700
+    assert [p.name for p in tmp_path.iterdir()] == ["problems"]  # no scratch folder left
+    marker = folder / "box_panda" / "marker"
+    marker.touch()
+    assert mbm.unpack(archive, tmp_path) == folder and marker.is_file()  # not unpacked again
 
 
 def test_bad_request_names_the_missing_joint(tmp_path):
