@@ -35,7 +35,6 @@ from planning.execution.options import InterfaceOptions
 from planning.io.scene_files import SceneFile
 from planning.model.layout import NUM_FINGERS
 from planning.motion_planner import MotionPlannerOptions
-from planning.planner_options import check_options as check_planner_options
 from planning.task.options import PickPlaceOptions
 
 DEFAULT_SCENARIO = "pickplace_scenario.yaml"
@@ -138,7 +137,7 @@ def check_scenario(scenario: PickPlaceScenario, where: str = "scenario") -> None
         raise ConfigError(f"{where}: 'mode' must be one of {', '.join(MODES)}")
     check_panda_config(scenario.robot, where)
     try:
-        check_planner_options(scenario.planner)
+        scenario.planner.check()
     except ValueError as e:
         raise ConfigError(f"{where}: planner: {e}") from None
     for section in ("task", "interface"):

@@ -218,7 +218,7 @@ class MotionPlanningInterface:
                 ErrorCode.INVALID_START,
                 f"the plan starts {gap:.3f} rad from the robot's current joints",
             )
-        plan.validate(self.scene, self.planner.options.validation_resolution)
+        plan.validate(self.scene, self.planner.options.validation.resolution)
         t = self.time
         command = ArmCommand(q_hold=plan.waypoints[-1].copy(), plan=plan, t0=t)
         self._commander.set_arm(self._context(self._commander), command)
@@ -377,7 +377,7 @@ class MotionPlanningInterface:
         if handle is self._arm:
             context = self._context(self._commander)
             command = self._commander.arm(context)
-            accel = np.asarray(self.planner.options.max_acceleration)
+            accel = np.asarray(self.planner.options.timing.max_acceleration)
             self._commander.set_arm(context, command.stopped(t, accel))
         elif handle is self._gripper:
             context = self._context(self._commander)

@@ -5,7 +5,7 @@ then finds a joint path: the straight line when it is collision-free, else RRT-C
 ``planning.search.rrt_batch``) followed by shortcutting (``planning.search.shortcut``). Collision
 queries go to conservative sphere models of the robot first (``planning.collision.sphere_checker``:
 what they prove free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` for
-what they cannot decide. Every path is re-checked at ``validation_resolution`` (0.01 rad) before it
+what they cannot decide. Every path is re-checked at ``validation.resolution`` (0.01 rad) before it
 is returned, accepting a configuration only when the spheres prove it free or Drake's checker
 finds it free; a segment failing that check is re-planned with edges checked at that
 resolution. The path is then timed within the scaled velocity and acceleration limits
@@ -28,11 +28,7 @@ from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
 from planning.plan import Plan, PlanResult
-from planning.planner_options import (
-    MotionPlannerOptions,
-    check_options,
-    load_planner_options,
-)
+from planning.planner_options import MotionPlannerOptions, load_planner_options
 from planning.robot_state import RobotState
 from planning.scene_objects import describe_scene
 from planning.search.cartesian import cartesian_path
@@ -41,23 +37,25 @@ from planning.search.rrt_batch import rrt_connect_batch
 from planning.search.shortcut import shortcut
 from planning.timing.retime import RetimeOptions
 
+__all__ = ["MotionPlanner", "MotionPlannerOptions", "load_planner_options"]
+
 
 class MotionPlanner:
     """Plans collision-free motions of the Panda in a ``PlanningScene``.
 
     Args:
         scene: the planning scene (robot, objects, collision checker).
-        options: planner options; ``config/planner.yaml`` when None.
+        options: planner options; ``MotionPlannerOptions()`` (the defaults) when None.
         state: the current state requests start from; ``RobotState(scene)`` ("ready") when None.
     """
 
     def __init__(self, scene, options: MotionPlannerOptions | None = None, *, state=None):
         self._scene = scene
-        self._options = options if options is not None else load_planner_options()
-        check_options(self._options)
+        self._options = options if options is not None else MotionPlannerOptions()
+        self._options.check()
         self._state = state if state is not None else RobotState(scene)
-        if self._options.sphere_checks:  # covers are made (or read from the cache) here, once
-            sphere_model(scene, self._options.sphere_slack)
+        if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
+            sphere_model(scene, self._options.spheres.slack)
         self._gcs = None  # a planning.search.gcs.SceneGcs after use_gcs()
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
@@ -79,7 +77,8 @@ class MotionPlanner:
 
         opts = self._options
         gcs_options = gcs_options or GcsOptions(
-            validation_resolution=opts.validation_resolution, max_velocity=list(opts.max_velocity)
+            validation_resolution=opts.validation.resolution,
+            max_velocity=list(opts.timing.max_velocity),
         )
         self._gcs = SceneGcs(self._scene, regions, region_options, gcs_options)
 
@@ -126,7 +125,7 @@ class MotionPlanner:
         """Plans to a pose of the end effector E, a position alone or an orientation alone.
 
         IK (``RobotState.ik``, with the scene's IK tolerances) gives up to
-        ``options.ik_solutions`` distinct collision-free goals, the first seeded at the start;
+        ``options.pose.ik_solutions`` distinct collision-free goals, the first seeded at the start;
         each is tried in turn until a path is found.
 
         Args:
@@ -146,7 +145,7 @@ class MotionPlanner:
         rng = np.random.default_rng(self._options.seed)
         adapter = CheckerAdapter(self._scene)
         goals, last_error = [], None
-        for k in range(self._options.ik_solutions):
+        for k in range(self._options.pose.ik_solutions):
             if time.perf_counter() > deadline:
                 break
             seed = q_start if k == 0 else rng.uniform(adapter.lower, adapter.upper)
@@ -196,10 +195,10 @@ class MotionPlanner:
             plant.GetFrameByName(name, scene.model.instance),
             q_start,
             X_WG,
-            max_step=opts.cartesian_step,
-            max_rotation_step=opts.cartesian_rotation_step,
-            jump_threshold=opts.cartesian_jump_threshold,
-            resolution=opts.validation_resolution,
+            max_step=opts.cartesian.step,
+            max_rotation_step=opts.cartesian.rotation_step,
+            jump_threshold=opts.cartesian.jump_threshold,
+            resolution=opts.validation.resolution,
         )
         plan = self._make_plan(result.waypoints, "cartesian", t0)
         if result.fraction < 1.0:
@@ -269,24 +268,22 @@ class MotionPlanner:
     def _adapter(self, resolution: float | None = None, *, search: bool = False):
         """Collision queries: sphere models first when enabled
         (``planning.collision.sphere_checker``). A search adapter leaves Drake out for
-        ``drake_fallback_after`` sphere-checked configurations (what the spheres cannot decide
-        counts as colliding), then asks it too; a validating one always does, so validation accepts
-        exactly what Drake's checker accepts."""
-        opts = self._options
-        if not opts.sphere_checks:
+        ``spheres.drake_fallback_after`` sphere-checked configurations (what the spheres cannot
+        decide counts as colliding), then asks it too; a validating one always does, so validation
+        accepts exactly what Drake's checker accepts."""
+        opts = self._options.spheres
+        if not opts.enabled:
             return CheckerAdapter(self._scene, resolution)
         after = None
         if search:
             after = opts.drake_fallback_after
             resolution = opts.search_resolution
-        return SphereCheckerAdapter(
-            self._scene, resolution, slack=opts.sphere_slack, fallback_after=after
-        )
+        return SphereCheckerAdapter(self._scene, resolution, slack=opts.slack, fallback_after=after)
 
     def _find_path(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
         opts = self._options
         adapter = self._adapter(search=True)
-        fine = self._adapter(opts.validation_resolution)
+        fine = self._adapter(opts.validation.resolution)
         rng = np.random.default_rng(opts.seed)
         how = "straight"
         path = np.vstack([q_start, q_goal])
@@ -301,45 +298,46 @@ class MotionPlanner:
                     adapter,
                     q_start,
                     q_goal,
-                    deadline=min(deadline, time.perf_counter() + opts.rrt_restart_interval),
+                    deadline=min(deadline, time.perf_counter() + opts.rrt.restart_interval),
                     rng=rng,
                 )
             if path is None:
                 raise self._failure(deadline, "RRT-Connect found no path")
             path = self._shortcut(adapter, path, deadline, rng)
         path, how = self._validated(fine, path, how, deadline, rng)
-        if opts.refine_with_kto and how != "straight":
+        if opts.kto.enabled and how != "straight":
             path, how = self._refined(path, how)
         return path, how
 
     def _shortcut(self, adapter, path: np.ndarray, deadline: float, rng) -> np.ndarray:
-        """Shortcuts a path with ``shortcut_time_fraction`` of the time left."""
-        opts = self._options
-        budget = opts.shortcut_time_fraction * max(0.0, deadline - time.perf_counter())
+        """Shortcuts a path with ``shortcut.time_fraction`` of the time left."""
+        opts = self._options.shortcut
+        budget = opts.time_fraction * max(0.0, deadline - time.perf_counter())
         return shortcut(
             adapter,
             path,
-            iterations=opts.shortcut_iterations,
+            iterations=opts.iterations,
             deadline=time.perf_counter() + budget,
             rng=rng,
         )
 
     def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
-        """RRT-Connect, batched (``planning.search.rrt_batch``) when ``rrt_batch`` > 1."""
-        opts = self._options
-        step = step or opts.rrt_step
+        """RRT-Connect, batched (``planning.search.rrt_batch``) when ``rrt.batch`` > 1."""
+        opts = self._options.rrt
+        step = step or opts.step
         kwargs = dict(step=step, goal_bias=opts.goal_bias, deadline=deadline, rng=rng)
-        if opts.rrt_batch > 1:
-            return rrt_connect_batch(adapter, q_a, q_b, batch=opts.rrt_batch, **kwargs)
+        if opts.batch > 1:
+            return rrt_connect_batch(adapter, q_a, q_b, batch=opts.batch, **kwargs)
         return rrt_connect(adapter, q_a, q_b, **kwargs)
 
     def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
         from planning.search.kto import kto_refine
 
-        dense = kto_refine(self._scene, path, max_velocity=np.asarray(self._options.max_velocity))
+        max_velocity = np.asarray(self._options.timing.max_velocity)
+        dense = kto_refine(self._scene, path, max_velocity=max_velocity)
         if dense is None or path_length(dense) >= path_length(path):
             return path, how
-        resolution = self._options.validation_resolution
+        resolution = self._options.validation.resolution
         if first_invalid_segment(self._adapter(), dense, resolution) is not None:
             return path, how
         return dense, how + "+kto"
@@ -347,18 +345,19 @@ class MotionPlanner:
     def _validated(self, fine, path, how, deadline, rng) -> tuple[np.ndarray, str]:
         """Re-checks the path at the fine resolution; re-plans a failing segment with
         RRT-Connect on fine edge checks (whose edges are then not checked twice), at most
-        ``max_repairs`` times. When a segment cannot be repaired within ``repair_timeout``
+        ``validation.max_repairs`` times. When a segment cannot be repaired within
+        ``validation.repair_timeout``
         (its ends sit in a tight spot), the whole path is re-planned and shortened with fine
         edge checks instead."""
-        opts = self._options
+        opts = self._options.validation
         for _ in range(opts.max_repairs + 1):
-            bad = first_invalid_segment(fine, path, opts.validation_resolution)
+            bad = first_invalid_segment(fine, path, opts.resolution)
             if bad is None:
                 return path, how
             # Measured: a fine-checked RRT-Connect between the segment's ends (usually a few
             # nodes) beats random two-segment detours, whose candidates mostly graze too.
             piece = None
-            for step in (opts.rrt_step, opts.repair_step):  # long steps first, then short
+            for step in (self._options.rrt.step, opts.repair_step):  # long steps first, then short
                 local = min(deadline, time.perf_counter() + opts.repair_timeout)
                 piece = self._rrt(
                     fine, path[bad], path[bad + 1], deadline=local, rng=rng, step=step
@@ -389,7 +388,7 @@ class MotionPlanner:
         return PlanResult(True, plan, None, f"planned ({how})", time.perf_counter() - t0)
 
     def _make_plan(self, path: np.ndarray, how: str, t0: float) -> Plan:
-        opts = self._options
+        opts = self._options.timing
         plan = Plan(
             waypoints=path,
             max_velocity=np.asarray(opts.max_velocity) * opts.velocity_scaling,
@@ -406,7 +405,7 @@ class MotionPlanner:
         )
         # The timing rounds gentle corners within 2 mrad of the checked path: check those
         # sections too, and where they graze something, stop at the waypoints instead.
-        resolution = opts.validation_resolution
+        resolution = self._options.validation.resolution
         if plan.smoothing_collision(self._adapter(resolution), resolution) is not None:
             plan = dc.replace(plan, timing=RetimeOptions(method="rest_to_rest"))
         return plan

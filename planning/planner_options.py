@@ -1,90 +1,241 @@
-"""Options of ``MotionPlanner`` and their YAML file (``config/planner.yaml``).
+"""Options of ``MotionPlanner``: one dataclass per algorithm, nested in ``MotionPlannerOptions``.
 
-Units: rad for joints, m for lengths, s for times. This module has no ``from __future__ import
-annotations``: the YAML loader reads the field types at run time.
+The defaults here are the planner's values (there is no default options file); a user's YAML
+file with any subset of them loads with ``load_planner_options(filename)``, sections nested::
+
+    timeout: 2.0
+    rrt: {step: 0.5, batch: 8}
+    timing: {velocity_scaling: 0.5}
+
+Units: rad for joints, m for lengths, s for times. "MBM" is the MotionBenchMaker Panda set
+(``planning.benchmark``). Each class's ``check()`` raises ValueError naming the bad field
+("rrt.step must be > 0, ..."). This module has no ``from __future__ import annotations``: the
+YAML loader reads the field types at run time.
 """
 
 import dataclasses as dc
+import math
+import numbers
 from pathlib import Path
 
-from pydrake.common.yaml import yaml_load_typed
+from drake_sim.base.config import load_typed
+from drake_sim.base.errors import ConfigError
 
-from drake_sim.base.resources import config_dir
+NUM_JOINTS = 7  # the Panda's arm joints
+
+
+def _require(ok: bool, field: str, rule: str, value) -> None:
+    """Raises ValueError "<field> must be <rule>, got <value>" unless ``ok``."""
+    if not ok:
+        raise ValueError(f"{field} must be {rule}, got {value!r}")
+
+
+def _positive(value, field: str) -> None:
+    _require(value > 0.0, field, "> 0", value)
+
+
+def _fraction(value, field: str, *, zero_ok: bool) -> None:
+    low_ok = value >= 0.0 if zero_ok else value > 0.0
+    _require(low_ok and value <= 1.0, field, "in [0, 1]" if zero_ok else "in (0, 1]", value)
+
+
+def _flag(value, field: str) -> None:
+    _require(isinstance(value, bool), field, "true or false", value)
+
+
+def _count(value, field: str, *, least: int) -> None:
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= least
+    _require(ok, field, f"an integer >= {least}", value)
+
+
+@dc.dataclass
+class RrtConnectOptions:
+    """RRT-Connect (``planning.search.rrt``; batched: ``planning.search.rrt_batch``)."""
+
+    # rad, largest RRT-Connect extension (joint-space L2). Measured on MBM (--limit 5 and 15,
+    # same runs as OMPL): step 1.0 with batch 16 beat 0.5 with batch 8 on median (100 vs
+    # 140 ms), p95 (1.4 vs 2.4 s) and path length; one problem got slower.
+    step: float = 1.0
+    goal_bias: float = 0.05  # probability of sampling the other tree's root
+    batch: int = 16  # RRT-Connect extensions per collision query (1: one at a time); see step
+    # s, RRT-Connect restarts with new trees after this (run times are heavy-tailed); shorter
+    # restarts (1, 2.5 s) measured no better on hard MBM problems.
+    restart_interval: float = 10.0
+
+    def check(self, prefix: str = "rrt") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _positive(self.step, f"{prefix}.step")
+        _fraction(self.goal_bias, f"{prefix}.goal_bias", zero_ok=True)
+        _count(self.batch, f"{prefix}.batch", least=1)
+        _positive(self.restart_interval, f"{prefix}.restart_interval")
+
+
+@dc.dataclass
+class ShortcutOptions:
+    """Shortcutting of a searched path (``planning.search.shortcut``)."""
+
+    iterations: int = 20  # random shortcut attempts after the greedy pass
+    time_fraction: float = 0.2  # at most this share of the remaining time goes to shortcutting
+
+    def check(self, prefix: str = "shortcut") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _count(self.iterations, f"{prefix}.iterations", least=0)
+        _fraction(self.time_fraction, f"{prefix}.time_fraction", zero_ok=True)
+
+
+@dc.dataclass
+class ValidationOptions:
+    """The fine collision check of every returned path, and the repair of failing segments."""
+
+    resolution: float = 0.01  # rad between fine collision checks of every returned path
+    max_repairs: int = 3  # segments re-planned with fine edge checks when validation fails
+    repair_timeout: float = 0.5  # s per segment repair; then the whole path is re-planned finely
+    repair_step: float = 0.25  # rad, RRT-Connect extension when repairing (tight spots)
+
+    def check(self, prefix: str = "validation") -> None:
+        """Raises ValueError naming the first field out of range."""
+        field = f"{prefix}.resolution"
+        _require(0.0 < self.resolution <= 0.01, field, "in (0, 0.01] rad", self.resolution)
+        _count(self.max_repairs, f"{prefix}.max_repairs", least=0)
+        _positive(self.repair_timeout, f"{prefix}.repair_timeout")
+        _positive(self.repair_step, f"{prefix}.repair_step")
+
+
+@dc.dataclass
+class PoseGoalOptions:
+    """Pose goals (``MotionPlanner.plan_to_pose``): IK solutions tried in turn."""
+
+    ik_solutions: int = 4  # distinct IK solutions tried for a pose goal
+
+    def check(self, prefix: str = "pose") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _count(self.ik_solutions, f"{prefix}.ik_solutions", least=1)
+
+
+@dc.dataclass
+class CartesianOptions:
+    """Straight end-effector lines (``planning.search.cartesian``)."""
+
+    step: float = 0.005  # m per Cartesian step
+    rotation_step: float = 0.05  # rad per Cartesian step
+    jump_threshold: float = 0.2  # rad, largest joint change per Cartesian step
+
+    def check(self, prefix: str = "cartesian") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _positive(self.step, f"{prefix}.step")
+        _positive(self.rotation_step, f"{prefix}.rotation_step")
+        _positive(self.jump_threshold, f"{prefix}.jump_threshold")
+
+
+def _panda_max_velocity() -> list[float]:
+    return [2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61]
+
+
+def _panda_max_acceleration() -> list[float]:
+    return [15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0]
+
+
+@dc.dataclass
+class TimingOptions:
+    """Joint limits the paths are timed within (``planning.timing.retime``), and their scaling."""
+
+    # rad/s, joints 1..7; default: the Franka Panda's limits (Franka's datasheet)
+    max_velocity: list[float] = dc.field(default_factory=_panda_max_velocity)
+    # rad/s^2, joints 1..7; default: the Franka Panda's limits (Franka's datasheet)
+    max_acceleration: list[float] = dc.field(default_factory=_panda_max_acceleration)
+    velocity_scaling: float = 1.0  # (0, 1], applied to max_velocity
+    acceleration_scaling: float = 1.0  # (0, 1], applied to max_acceleration
+
+    def check(self, prefix: str = "timing") -> None:
+        """Raises ValueError naming the first field out of range."""
+        for name in ("max_velocity", "max_acceleration"):
+            values = getattr(self, name)
+            ok = len(values) == NUM_JOINTS and all(v > 0.0 and math.isfinite(v) for v in values)
+            _require(ok, f"{prefix}.{name}", f"{NUM_JOINTS} finite values > 0", values)
+        _fraction(self.velocity_scaling, f"{prefix}.velocity_scaling", zero_ok=False)
+        _fraction(self.acceleration_scaling, f"{prefix}.acceleration_scaling", zero_ok=False)
+
+
+@dc.dataclass
+class KtoOptions:
+    """Path smoothing with KinematicTrajectoryOptimization (``planning.search.kto``)."""
+
+    # Smooth searched paths and keep the result when it passes the fine check and is shorter.
+    # Off: measured about 1 s more per MBM problem, and only 4 of 13 results passed the 0.01 rad
+    # check.
+    enabled: bool = False
+
+    def check(self, prefix: str = "kto") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _flag(self.enabled, f"{prefix}.enabled")
+
+
+@dc.dataclass
+class SphereCheckOptions:
+    """Sphere models of the robot (``planning.collision.spheres``) for collision queries."""
+
+    # Answer collision queries with the spheres first (conservative: free for the spheres
+    # implies free for Drake), and ask Drake's checker only where the spheres cannot decide.
+    enabled: bool = True
+    # m, how far spheres may bulge beyond the link meshes (smaller: a tighter cover, more spheres)
+    slack: float = 0.015
+    # Sphere-checked configurations of a search before Drake is asked about what the spheres
+    # cannot decide (until then that counts as colliding); validation always asks Drake. A
+    # count, not a time, so that a seed gives the same path on any machine. Measured on MBM
+    # (--limit 5, two runs each): 50k had the best mean (85-91 ms) and p95 (0.27 s); 10k and 25k
+    # were slower (mean 107-150 ms, p95 0.56-0.63 s), and 100k missed a problem.
+    drake_fallback_after: int = 50_000
+    # rad between collision samples of the search's edges with sphere checks (the returned path
+    # is validated at validation.resolution in any case).
+    search_resolution: float = 0.1
+
+    def check(self, prefix: str = "spheres") -> None:
+        """Raises ValueError naming the first field out of range."""
+        _flag(self.enabled, f"{prefix}.enabled")
+        _positive(self.slack, f"{prefix}.slack")
+        _count(self.drake_fallback_after, f"{prefix}.drake_fallback_after", least=0)
+        _positive(self.search_resolution, f"{prefix}.search_resolution")
 
 
 @dc.dataclass
 class MotionPlannerOptions:
-    """Options of ``MotionPlanner`` (values in ``config/planner.yaml``)."""
+    """Options of ``MotionPlanner``: the request budget and seed, and one section per algorithm.
+
+    ``dc.replace(options, seed=1)`` changes a top-level field; a section's field with
+    ``dc.replace(options, rrt=dc.replace(options.rrt, batch=1))``.
+    """
 
     timeout: float = 5.0  # s of wall time per request
     seed: int = 0  # seed of np.random.default_rng, fresh for each request
-    rrt_step: float = 1.0  # rad, largest RRT-Connect extension (joint-space L2)
-    goal_bias: float = 0.05  # probability of sampling the other tree's root
-    rrt_batch: int = 16  # RRT-Connect extensions per collision query (1: one at a time)
-    rrt_restart_interval: float = 10.0  # s, RRT-Connect restarts with new trees after this
-    shortcut_iterations: int = 20  # random shortcut attempts after the greedy pass
-    shortcut_time_fraction: float = 0.2  # share of the remaining time shortcutting may use
-    validation_resolution: float = 0.01  # rad between fine checks of every returned path
-    max_repairs: int = 3  # segments re-planned with fine edge checks when validation fails
-    repair_timeout: float = 0.5  # s per segment repair attempt; then the whole path is re-planned
-    repair_step: float = 0.25  # rad, RRT-Connect extension when repairing (tight spots)
-    ik_solutions: int = 4  # distinct IK solutions tried for a pose goal
-    cartesian_step: float = 0.005  # m per Cartesian step
-    cartesian_rotation_step: float = 0.05  # rad per Cartesian step
-    cartesian_jump_threshold: float = 0.2  # rad, largest joint change per Cartesian step
-    max_velocity: list[float] = dc.field(
-        default_factory=lambda: [2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61]
-    )  # rad/s
-    max_acceleration: list[float] = dc.field(
-        default_factory=lambda: [15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0]
-    )  # rad/s^2
-    velocity_scaling: float = 1.0  # (0, 1]
-    acceleration_scaling: float = 1.0  # (0, 1]
-    # Smooth searched paths with KinematicTrajectoryOptimization (planning.search.kto) and keep the
-    # result when it passes the fine check and is shorter. Off: measured about 1 s more per MBM
-    # problem, and only 4 of 13 results passed the 0.01 rad check.
-    refine_with_kto: bool = False
-    # Answer collision queries with sphere models of the robot first (planning.collision.spheres),
-    # and ask Drake's checker only where the spheres cannot decide.
-    sphere_checks: bool = True
-    sphere_slack: float = 0.015  # m, how far spheres may bulge beyond the link meshes
-    # Sphere-checked configurations of a search before Drake is asked about what the spheres
-    # cannot decide (until then that counts as colliding); validation always asks Drake. A
-    # count, not a time, so that a seed gives the same path on any machine.
-    drake_fallback_after: int = 50_000
-    # rad between collision samples of the search's edges with sphere checks (the returned path
-    # is validated at validation_resolution in any case).
-    search_resolution: float = 0.1
+    rrt: RrtConnectOptions = dc.field(default_factory=RrtConnectOptions)
+    shortcut: ShortcutOptions = dc.field(default_factory=ShortcutOptions)
+    validation: ValidationOptions = dc.field(default_factory=ValidationOptions)
+    pose: PoseGoalOptions = dc.field(default_factory=PoseGoalOptions)
+    cartesian: CartesianOptions = dc.field(default_factory=CartesianOptions)
+    timing: TimingOptions = dc.field(default_factory=TimingOptions)
+    kto: KtoOptions = dc.field(default_factory=KtoOptions)
+    spheres: SphereCheckOptions = dc.field(default_factory=SphereCheckOptions)
+
+    def check(self) -> None:
+        """Raises ValueError naming the first field out of range, sections included."""
+        _positive(self.timeout, "timeout")
+        _count(self.seed, "seed", least=0)
+        for field in dc.fields(self):
+            section = getattr(self, field.name)
+            if dc.is_dataclass(section):
+                section.check(field.name)
 
 
-def load_planner_options(filename: Path | str | None = None) -> MotionPlannerOptions:
-    """Loads options from YAML (``config/planner.yaml`` when None); unknown keys are errors."""
-    if filename is None:
-        filename = config_dir() / "planner.yaml"
-    return yaml_load_typed(schema=MotionPlannerOptions, filename=str(filename))
+def load_planner_options(filename: Path | str) -> MotionPlannerOptions:
+    """Loads options from a YAML file; fields it leaves out keep their defaults.
 
-
-def check_options(options: MotionPlannerOptions) -> None:
-    """Raises ValueError for options no planner can use."""
-    positive = (
-        "timeout",
-        "rrt_step",
-        "rrt_restart_interval",
-        "validation_resolution",
-        "cartesian_step",
-        "sphere_slack",
-        "search_resolution",
-        "repair_timeout",
-        "repair_step",
-    )
-    bad = [name for name in positive if getattr(options, name) <= 0.0]
-    if not (0.0 < options.velocity_scaling <= 1.0 and 0.0 < options.acceleration_scaling <= 1.0):
-        bad.append("velocity_scaling/acceleration_scaling (must be in (0, 1])")
-    if len(options.max_velocity) != 7 or len(options.max_acceleration) != 7:
-        bad.append("max_velocity/max_acceleration (7 values each)")
-    if options.rrt_batch < 1 or options.drake_fallback_after < 0:
-        bad.append("rrt_batch (at least 1)/drake_fallback_after (not negative)")
-    if options.validation_resolution > 0.01:
-        bad.append("validation_resolution (at most 0.01 rad)")
-    if bad:
-        raise ValueError(f"bad MotionPlannerOptions: {', '.join(bad)}")
+    Raises:
+        ConfigError: the file is missing or malformed, has an unknown key, a value of the wrong
+            type or one out of range (``MotionPlannerOptions.check``), naming the file and key.
+    """
+    options = load_typed(MotionPlannerOptions, filename=filename)
+    try:
+        options.check()
+    except ValueError as e:
+        raise ConfigError(f"{filename}: {e}") from None
+    return options

@@ -180,6 +180,17 @@ def _gap2(a, i, b, j):
 
 
 @njit(cache=True)
+def _band(d2, inner2, outer2):
+    """COLLIDING when the squared distance d2 is below the inner band (the spheres that lie
+    inside the geometry overlap), UNKNOWN below the outer band, else FREE."""
+    if d2 < inner2:
+        return COLLIDING
+    if d2 < outer2:
+        return UNKNOWN
+    return FREE
+
+
+@njit(cache=True)
 def _classify_one(q, d, stop_at_unknown, work):
     """FREE, COLLIDING or UNKNOWN for the arm configuration q (7,). With
     ``stop_at_unknown``, returns at the first uncertain sphere (UNKNOWN, though a later
@@ -238,11 +249,10 @@ def _classify_one(q, d, stop_at_unknown, work):
                 best = min(
                     best, _distance2(centres[c, 0], centres[c, 1], centres[c, 2], objects[o])
                 )
-            if best < d.env_in[e, m]:
-                return COLLIDING
-            if best < d.env_out[e, m]:
-                if stop_at_unknown:
-                    return UNKNOWN
+            verdict = _band(best, d.env_in[e, m], d.env_out[e, m])
+            if verdict != FREE:
+                if verdict == COLLIDING or stop_at_unknown:
+                    return verdict
                 state = UNKNOWN
     for p in range(len(d.body_pair_reach2)):
         if _gap2(bodies, d.body_pair[p, 0], bodies, d.body_pair[p, 1]) >= d.body_pair_reach2[p]:
@@ -262,12 +272,10 @@ def _classify_one(q, d, stop_at_unknown, work):
                 u = centres[i, 0] - centres[j, 0]
                 v = centres[i, 1] - centres[j, 1]
                 w = centres[i, 2] - centres[j, 2]
-                d2 = u * u + v * v + w * w
-                if d2 < d.pair_in[k, m]:
-                    return COLLIDING
-                if d2 < d.pair_out[k, m]:
-                    if stop_at_unknown:
-                        return UNKNOWN
+                verdict = _band(u * u + v * v + w * w, d.pair_in[k, m], d.pair_out[k, m])
+                if verdict != FREE:
+                    if verdict == COLLIDING or stop_at_unknown:
+                        return verdict
                     state = UNKNOWN
     return state
 

@@ -7,6 +7,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 import planning.motion_planner as mut
 from planning import ErrorCode, PlanningError, PlanningScene
+from planning.planner_options import KtoOptions, RrtConnectOptions, TimingOptions, ValidationOptions
 
 # m, p_WO of the object's centre, 2 mm above the table: a held object touching the table counts
 # as a collision (the scene cannot yet allow held-object/support contacts, MoveIt's touch links).
@@ -44,10 +45,6 @@ def assert_fine_collision_free(scene, path, resolution=0.01):
 
 def above(p, height):
     return RigidTransform(R_DOWN, p + [0.0, 0.0, height])
-
-
-def test_options_yaml_matches_defaults():
-    assert mut.load_planner_options() == mut.MotionPlannerOptions()
 
 
 def test_joint_goal_from_current_state(dut, scene):
@@ -95,10 +92,10 @@ def test_over_the_obstacle_needs_a_search_and_stays_free(dut, scene):
 
 
 def test_one_extension_per_query_also_finds_a_free_path(dut, scene):
-    """rrt_batch 1: the classic RRT-Connect (planning.search.rrt.rrt_connect) instead of batches."""
+    """rrt.batch 1: the classic RRT-Connect (planning.search.rrt.rrt_connect) instead of batches."""
     q_a = dut.plan_to_pose(above(OBJECT, 0.06)).trajectory.waypoints[-1]
     q_b = dut.plan_to_pose(above(PLACE, 0.06), q_start=q_a).trajectory.waypoints[-1]
-    planner = mut.MotionPlanner(scene, mut.MotionPlannerOptions(rrt_batch=1))
+    planner = mut.MotionPlanner(scene, mut.MotionPlannerOptions(rrt=RrtConnectOptions(batch=1)))
     path = planner.plan_to_joints(q_b, q_start=q_a).trajectory.waypoints
     np.testing.assert_array_equal(path[[0, -1]], [q_a, q_b])
     assert_fine_collision_free(scene, path)
@@ -216,23 +213,24 @@ def scene_object_at(X_WO):
 
 
 def test_bad_options_are_rejected(scene):
-    with pytest.raises(ValueError, match="velocity_scaling"):
-        mut.MotionPlanner(scene, mut.MotionPlannerOptions(velocity_scaling=1.5))
-    with pytest.raises(ValueError, match="validation_resolution"):
-        mut.MotionPlanner(scene, mut.MotionPlannerOptions(validation_resolution=0.05))
+    with pytest.raises(ValueError, match="timing.velocity_scaling"):
+        timing = TimingOptions(velocity_scaling=1.5)
+        mut.MotionPlanner(scene, mut.MotionPlannerOptions(timing=timing))
+    with pytest.raises(ValueError, match="validation.resolution"):
+        validation = ValidationOptions(resolution=0.05)
+        mut.MotionPlanner(scene, mut.MotionPlannerOptions(validation=validation))
 
 
 def test_scaling_slows_the_plan(dut):
-    slow = mut.MotionPlanner(
-        dut.scene, mut.MotionPlannerOptions(velocity_scaling=0.5, acceleration_scaling=0.25)
-    )
+    timing = TimingOptions(velocity_scaling=0.5, acceleration_scaling=0.25)
+    slow = mut.MotionPlanner(dut.scene, mut.MotionPlannerOptions(timing=timing))
     goal = dut.state.named("extended")
     fast_plan, slow_plan = dut.plan_to_joints(goal).plan, slow.plan_to_joints(goal).plan
     assert slow_plan.duration == pytest.approx(2.0 * fast_plan.duration)
 
 
 def test_kto_refinement_keeps_a_valid_path(scene):
-    options = mut.MotionPlannerOptions(refine_with_kto=True)
+    options = mut.MotionPlannerOptions(kto=KtoOptions(enabled=True))
     dut = mut.MotionPlanner(scene, options)
     q_a = dut.plan_to_pose(above(OBJECT, 0.06)).trajectory.waypoints[-1]
     q_b = dut.plan_to_pose(above(PLACE, 0.06), q_start=q_a).trajectory.waypoints[-1]
