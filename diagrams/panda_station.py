@@ -56,7 +56,7 @@ from planning.model.panda import (
     apply_disabled_collisions,
     disabled_collision_pairs,
 )
-from planning.scene_objects import free_body_positions
+from planning.scene_objects import FREE_BODY_POSITIONS, free_body_positions
 
 PANDA = "panda"
 """The Panda's model instance name; its ports are ``panda.<signal>``."""
@@ -183,8 +183,6 @@ def _add_world(plant: MultibodyPlant, config: PandaStationConfig, *, physics: bo
         )
     plant.Finalize()
     plant.SetDefaultPositions(panda, np.asarray(config.initial_q, dtype=float))
-    if body is not None:
-        plant.SetDefaultFloatingBaseBodyPose(body, box_pose(scene.object))
     return panda, body
 
 
@@ -325,7 +323,7 @@ def _make_kinematic(config: PandaStationConfig, meshcat) -> Diagram:
         to_pose.get_output_port(), scene_graph.get_source_pose_port(plant.get_source_id())
     )
 
-    sizes = [NUM_POSITIONS] + ([7] if body is not None else [])
+    sizes = [NUM_POSITIONS] + ([FREE_BODY_POSITIONS] if body is not None else [])
     mux = builder.AddSystem(Multiplexer(sizes))
     builder.Connect(mux.get_output_port(), to_q.get_input_port())
     interpolator = builder.AddSystem(

@@ -9,7 +9,7 @@ from pydrake.multibody.tree import RigidBody, SpatialInertia
 from pydrake.systems.framework import LeafSystem
 
 from planning.io.scene_files import BoxSpec
-from planning.scene_objects import free_body_pose
+from planning.scene_objects import FREE_BODY_POSITIONS, free_body_pose
 
 
 class FreeBodyPose(LeafSystem):
@@ -36,7 +36,7 @@ class FreeBodyPose(LeafSystem):
         self.DeclareAbstractOutputPort("pose", lambda: Value(RigidTransform()), self.CalcPose)
 
     def CalcPose(self, context, output) -> None:
-        output.set_value(free_body_pose(self._input.Eval(context)[:7]))
+        output.set_value(free_body_pose(self._input.Eval(context)[:FREE_BODY_POSITIONS]))
 
 
 def box_pose(box: BoxSpec) -> RigidTransform:
@@ -80,6 +80,7 @@ def add_scene_box(
     body = plant.AddRigidBody(name, instance, inertia)
     plant.RegisterCollisionGeometry(body, RigidTransform(), shape, name, props)
     plant.RegisterVisualGeometry(body, RigidTransform(), shape, name, color.rgba)
+    plant.SetDefaultFloatingBaseBodyPose(body, box_pose(box))
     return body
 
 

@@ -39,6 +39,7 @@ from planning._ompl_baseline import ompl_available, ompl_plan
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import PlanningError
 from planning.io import mbm
+from planning.model.layout import ARM_Q, FINGER_Q
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
 from planning.paths import path_length
 from planning.planning_scene import PlanningScene
@@ -61,8 +62,8 @@ def problems_folder(dataset: Path) -> Path:
 def _load(scene, problem):
     scene.load_moveit(problem.scene_file)
     request = mbm.load_request(problem.request_file)
-    scene.finger_positions = request.q_start[7:]
-    return request.q_start[:7], request.q_goal[:7]
+    scene.finger_positions = request.q_start[FINGER_Q]
+    return request.q_start[ARM_Q], request.q_goal[ARM_Q]
 
 
 def run_problem(scene, planner, problem, timeout: float) -> dict:

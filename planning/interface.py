@@ -32,7 +32,14 @@ from planning.errors import ErrorCode, PlanningError
 from planning.execution.commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
 from planning.execution.handles import ActionHandle, ExecutionResult, PlanHandle, submit
 from planning.execution.options import InterfaceOptions
-from planning.model.layout import FINGER_CLOSED, FINGER_OPEN
+from planning.model.layout import (
+    ARM_V,
+    FINGER_CLOSED,
+    FINGER_OPEN,
+    FINGER_Q,
+    FINGER_V,
+    NUM_POSITIONS,
+)
 from planning.model.panda import ATTACHMENT_BODY
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 from planning.robot_state import RobotState
@@ -146,7 +153,7 @@ class MotionPlanningInterface:
         """Reads the Panda's 18 measured values (9 positions, 9 velocities), updates
         ``state`` and returns them."""
         x = self._station.GetOutputPort("panda.state").Eval(self._context(self._station))
-        self.state.set_q(x[:9])
+        self.state.set_q(x[:NUM_POSITIONS])
         return np.array(x)
 
     def object_pose(self):
@@ -268,10 +275,10 @@ class MotionPlanningInterface:
         t, end = self.time, command.end_time()
         if t < end + opts.settle_time:
             return
-        q, v = self.state.q, x[9:16]
+        q, v = self.state.q, x[ARM_V]
         if np.max(np.abs(v)) > opts.settle_velocity and t < end + opts.settle_timeout:
             return
-        finger = float(np.mean(x[7:9]))
+        finger = float(np.mean(x[FINGER_Q]))
         if command.stop_at is not None:
             result = ExecutionResult(
                 False, ErrorCode.PREEMPTED, "cancelled", q, finger, handle.start_time, t
@@ -347,10 +354,10 @@ class MotionPlanningInterface:
         t, end = self.time, command.end_time()
         if t < end + opts.settle_time:
             return
-        moving = np.max(np.abs(x[16:18])) > opts.finger_settle_velocity
+        moving = np.max(np.abs(x[FINGER_V])) > opts.finger_settle_velocity
         if moving and t < end + opts.finger_settle_timeout:
             return
-        finger = float(np.mean(x[7:9]))
+        finger = float(np.mean(x[FINGER_Q]))
         if handle.cancel_requested:
             result = ExecutionResult(
                 False, ErrorCode.PREEMPTED, "cancelled", self.state.q, finger, handle.start_time, t

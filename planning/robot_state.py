@@ -201,5 +201,5 @@ class RobotState:
         """
         if model_instance is None:
             model_instance = plant.GetModelInstanceByName("panda")
-        self.set_q(plant.GetPositions(plant_context, model_instance)[:9])
+        self.set_q(plant.GetPositions(plant_context, model_instance)[:NUM_POSITIONS])
         return self.q, self.fk()

@@ -112,10 +112,15 @@ def _finite_vector(values, size: int, what: str) -> np.ndarray:
     return array
 
 
+FREE_BODY_POSITIONS = 7
+"""Positions of a free body in a plant: its quaternion [qw, qx, qy, qz], then [x, y, z]."""
+
+
 def free_body_pose(q: np.ndarray) -> RigidTransform:
     """X_WB from a free body's 7 positions [qw, qx, qy, qz, x, y, z] (quaternion normalised)."""
     quaternion = np.asarray(q[:4], dtype=float)
-    return RigidTransform(Quaternion(quaternion / np.linalg.norm(quaternion)), q[4:7])
+    p_WB = q[4:FREE_BODY_POSITIONS]
+    return RigidTransform(Quaternion(quaternion / np.linalg.norm(quaternion)), p_WB)
 
 
 def free_body_positions(X_WB: RigidTransform) -> np.ndarray:

@@ -22,8 +22,8 @@ class ArgumentParser(argparse.ArgumentParser):
 def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None = None) -> int:
     """Runs ``main(argv)`` and turns bad input into one stderr line and exit code 2.
 
-    ``ConfigError`` (and ``ValueError``/``FileNotFoundError`` raised while reading input) is
-    reported as ``error: <message>``; Ctrl-C ends the run quietly with code 0.
+    ``ConfigError`` (every loader turns bad input into one) is reported as ``error: <message>``
+    on one line; Ctrl-C ends the run quietly with code 0. Anything else is a bug and is raised.
     """
     try:
         return main(argv)

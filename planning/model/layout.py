@@ -23,3 +23,12 @@ FINGER_CLOSED = 0.0
 
 READY_Q = (0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4)
 """rad, Franka's "ready" arm configuration (the arm's start in every shipped scenario)."""
+
+ARM_Q = slice(0, NUM_ARM_JOINTS)
+"""The arm's positions in a configuration q (or a state x)."""
+FINGER_Q = slice(NUM_ARM_JOINTS, NUM_POSITIONS)
+"""The fingers' positions in q (or x)."""
+ARM_V = slice(NUM_POSITIONS, NUM_POSITIONS + NUM_ARM_JOINTS)
+"""The arm's velocities in a state x."""
+FINGER_V = slice(NUM_POSITIONS + NUM_ARM_JOINTS, NUM_STATES)
+"""The fingers' velocities in a state x."""

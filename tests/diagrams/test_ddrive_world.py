@@ -8,7 +8,6 @@ from pydrake.math import RollPitchYaw
 from pydrake.systems.analysis import Simulator
 
 import diagrams.ddrive_world as mut
-from diagrams.ddrive_model import make_ddrive_model_diagram
 from diagrams.flip_scenario import load_flip_scenario
 from drake_sim.base.resources import config_dir
 from drake_sim.robots.ddrive import default_robot_file
@@ -65,12 +64,3 @@ def test_bare_ground_and_exported_ports(scenario, robot):
     assert diagram.get_input_port(0).get_name() == "ddrive.actuation"
     plant, _, X_WB = _rest(diagram, 0.5)
     assert X_WB.translation()[2] == pytest.approx(robot.wheel.radius, abs=3e-3)
-
-
-def test_model_diagram_is_welded(robot):
-    diagram = make_ddrive_model_diagram(robot)
-    plant = diagram.GetSubsystemByName("plant")
-    assert plant.num_positions() == 2  # the two wheels, nothing floating
-    context = plant.CreateDefaultContext()
-    X_WB = plant.EvalBodyPoseInWorld(context, plant.GetBodyByName("base_link"))
-    assert X_WB.translation()[2] == pytest.approx(robot.wheel.radius, abs=2e-3)
