@@ -35,3 +35,7 @@ class PlanningError(RuntimeError):
         super().__init__(f"{code.name}: {message}")
         self.code = code
         self.message = message
+
+    def __reduce__(self):
+        """Pickles as (code, message), so the error crosses process boundaries (sweeps)."""
+        return (type(self), (self.code, self.message))

@@ -23,8 +23,8 @@ import time
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
-from planning.collision.checker import CheckerAdapter, first_invalid_segment
-from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
+from planning.collision.checker import CheckerAdapter
+from planning.collision.sphere_checker import sphere_model
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
 from planning.plan import Plan, PlanResult
@@ -32,9 +32,7 @@ from planning.planner_options import MotionPlannerOptions, load_planner_options
 from planning.robot_state import RobotState
 from planning.scene_objects import describe_scene
 from planning.search.cartesian import cartesian_path
-from planning.search.rrt import rrt_connect
-from planning.search.rrt_batch import rrt_connect_batch
-from planning.search.shortcut import shortcut
+from planning.search.joint_path import JointPathSearch
 from planning.timing.retime import RetimeOptions
 
 __all__ = ["MotionPlanner", "MotionPlannerOptions", "load_planner_options"]
@@ -56,7 +54,7 @@ class MotionPlanner:
         self._state = state if state is not None else RobotState(scene)
         if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.spheres.slack)
-        self._gcs = None  # a planning.search.gcs.SceneGcs after use_gcs()
+        self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
@@ -80,7 +78,7 @@ class MotionPlanner:
             validation_resolution=opts.validation.resolution,
             max_velocity=list(opts.timing.max_velocity),
         )
-        self._gcs = SceneGcs(self._scene, regions, region_options, gcs_options)
+        self._search.gcs = SceneGcs(self._scene, regions, region_options, gcs_options)
 
     @property
     def scene(self):
@@ -106,7 +104,7 @@ class MotionPlanner:
         deadline = t0 + (timeout or self._options.timeout)
         q_start = self._check_start(q_start)
         q_goal = self._check_goal(q_goal)
-        path, how = self._find_path(q_start, q_goal, deadline)
+        path, how = self._search.find(q_start, q_goal, deadline)
         return self._result(path, how, t0)
 
     def plan_to_named(self, name: str, *, q_start=None, timeout: float | None = None):
@@ -160,7 +158,7 @@ class MotionPlanner:
                 continue
             goals.append(ik.q)
             try:
-                path, how = self._find_path(q_start, ik.q, deadline)
+                path, how = self._search.find(q_start, ik.q, deadline)
             except PlanningError as e:
                 last_error = e
                 continue
@@ -217,7 +215,7 @@ class MotionPlanner:
         how it was found ("straight", "rrt_connect", ...); for benchmarks and callers that time
         paths themselves."""
         deadline = time.perf_counter() + (timeout or self._options.timeout)
-        return self._find_path(self._check_start(q_start), self._check_goal(q_goal), deadline)
+        return self._search.find(self._check_start(q_start), self._check_goal(q_goal), deadline)
 
     # ------------------------------------------------------------------------- checking ----
     def _check_start(self, q_start) -> np.ndarray:
@@ -264,124 +262,6 @@ class MotionPlanner:
                 f"{self._scene.describe_collisions(ik.q)}",
             )
 
-    # --------------------------------------------------------------------------- search ----
-    def _adapter(self, resolution: float | None = None, *, search: bool = False):
-        """Collision queries: sphere models first when enabled
-        (``planning.collision.sphere_checker``). A search adapter leaves Drake out for
-        ``spheres.drake_fallback_after`` sphere-checked configurations (what the spheres cannot
-        decide counts as colliding), then asks it too; a validating one always does, so validation
-        accepts exactly what Drake's checker accepts."""
-        opts = self._options.spheres
-        if not opts.enabled:
-            return CheckerAdapter(self._scene, resolution)
-        after = None
-        if search:
-            after = opts.drake_fallback_after
-            resolution = opts.search_resolution
-        return SphereCheckerAdapter(self._scene, resolution, slack=opts.slack, fallback_after=after)
-
-    def _find_path(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
-        opts = self._options
-        adapter = self._adapter(search=True)
-        fine = self._adapter(opts.validation.resolution)
-        rng = np.random.default_rng(opts.seed)
-        how = "straight"
-        path = np.vstack([q_start, q_goal])
-        if not adapter.edge_free(q_start, q_goal):
-            how = "rrt_connect"
-            path = self._gcs.path(q_start, q_goal, deadline) if self._gcs else None
-            if path is not None:
-                how = "gcs"
-            while path is None and time.perf_counter() < deadline:
-                # Restart with fresh trees now and then: RRT run times are heavy-tailed.
-                path = self._rrt(
-                    adapter,
-                    q_start,
-                    q_goal,
-                    deadline=min(deadline, time.perf_counter() + opts.rrt.restart_interval),
-                    rng=rng,
-                )
-            if path is None:
-                raise self._failure(deadline, "RRT-Connect found no path")
-            path = self._shortcut(adapter, path, deadline, rng)
-        path, how = self._validated(fine, path, how, deadline, rng)
-        if opts.kto.enabled and how != "straight":
-            path, how = self._refined(path, how)
-        return path, how
-
-    def _shortcut(self, adapter, path: np.ndarray, deadline: float, rng) -> np.ndarray:
-        """Shortcuts a path with ``shortcut.time_fraction`` of the time left."""
-        opts = self._options.shortcut
-        budget = opts.time_fraction * max(0.0, deadline - time.perf_counter())
-        return shortcut(
-            adapter,
-            path,
-            iterations=opts.iterations,
-            deadline=time.perf_counter() + budget,
-            rng=rng,
-        )
-
-    def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
-        """RRT-Connect, batched (``planning.search.rrt_batch``) when ``rrt.batch`` > 1."""
-        opts = self._options.rrt
-        step = step or opts.step
-        kwargs = dict(step=step, goal_bias=opts.goal_bias, deadline=deadline, rng=rng)
-        if opts.batch > 1:
-            return rrt_connect_batch(adapter, q_a, q_b, batch=opts.batch, **kwargs)
-        return rrt_connect(adapter, q_a, q_b, **kwargs)
-
-    def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
-        from planning.search.kto import kto_refine
-
-        max_velocity = np.asarray(self._options.timing.max_velocity)
-        dense = kto_refine(self._scene, path, max_velocity=max_velocity)
-        if dense is None or path_length(dense) >= path_length(path):
-            return path, how
-        resolution = self._options.validation.resolution
-        if first_invalid_segment(self._adapter(), dense, resolution) is not None:
-            return path, how
-        return dense, how + "+kto"
-
-    def _validated(self, fine, path, how, deadline, rng) -> tuple[np.ndarray, str]:
-        """Re-checks the path at the fine resolution; re-plans a failing segment with
-        RRT-Connect on fine edge checks (whose edges are then not checked twice), at most
-        ``validation.max_repairs`` times. When a segment cannot be repaired within
-        ``validation.repair_timeout``
-        (its ends sit in a tight spot), the whole path is re-planned and shortened with fine
-        edge checks instead."""
-        opts = self._options.validation
-        for _ in range(opts.max_repairs + 1):
-            bad = first_invalid_segment(fine, path, opts.resolution)
-            if bad is None:
-                return path, how
-            # Measured: a fine-checked RRT-Connect between the segment's ends (usually a few
-            # nodes) beats random two-segment detours, whose candidates mostly graze too.
-            piece = None
-            for step in (self._options.rrt.step, opts.repair_step):  # long steps first, then short
-                local = min(deadline, time.perf_counter() + opts.repair_timeout)
-                piece = self._rrt(
-                    fine, path[bad], path[bad + 1], deadline=local, rng=rng, step=step
-                )
-                if piece is not None:
-                    break
-            if piece is not None:
-                path = np.vstack([path[:bad], piece, path[bad + 2 :]])
-                how += "+repaired"
-                continue
-            step = opts.repair_step
-            whole = self._rrt(fine, path[0], path[-1], deadline=deadline, rng=rng, step=step)
-            if whole is None:
-                break
-            path = self._shortcut(fine, whole, deadline, rng)
-            how += "+replanned"
-        raise self._failure(deadline, "no path passed the fine collision check")
-
-    @staticmethod
-    def _failure(deadline: float, why: str) -> PlanningError:
-        if time.perf_counter() > deadline:
-            return PlanningError(ErrorCode.TIMED_OUT, f"{why} before the timeout")
-        return PlanningError(ErrorCode.PLANNING_FAILED, why)
-
     # --------------------------------------------------------------------------- output ----
     def _result(self, path: np.ndarray, how: str, t0: float) -> PlanResult:
         plan = self._make_plan(path, how, t0)
@@ -406,6 +286,6 @@ class MotionPlanner:
         # The timing rounds gentle corners within 2 mrad of the checked path: check those
         # sections too, and where they graze something, stop at the waypoints instead.
         resolution = self._options.validation.resolution
-        if plan.smoothing_collision(self._adapter(resolution), resolution) is not None:
+        if plan.smoothing_collision(self._search.adapter(resolution), resolution) is not None:
             plan = dc.replace(plan, timing=RetimeOptions(method="rest_to_rest"))
         return plan

@@ -43,7 +43,7 @@ class ArmCommand:
     def plan_time(self, t: float) -> float:
         """The time along the plan at simulated time t (slowed down after a stop), s."""
         tau = t - self.t0
-        if self.stop_at is None:
+        if self.stop_at is None or t <= self.stop_at:
             return tau
         elapsed = min(max(t - self.stop_at, 0.0), self.stop_duration)
         t_c = self.stop_at - self.t0

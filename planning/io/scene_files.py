@@ -107,7 +107,7 @@ def apply_scene_file(scene, spec: SceneFile, *, where: str = "scene") -> None:
         place = None if spec.place is None else make_pose(spec.place.position, name="place")
     except ValueError as e:
         raise PlanningError(ErrorCode.INVALID_SCENE, f"{where}: {e}") from e
-    _replace(scene, objects, attached)
+    _replace(scene, objects, attached, where)
     scene.place_position = None if place is None else place.translation()
 
 
@@ -152,7 +152,7 @@ def load_moveit_scene(scene, filename: Path | str) -> None:
         allowed = parse_allowed_collisions(data)
     except (ValueError, KeyError, TypeError) as e:
         raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
-    _replace(scene, objects, [])
+    _replace(scene, objects, [], str(filename))
     scene.place_position = None
     for link_a, link_b in allowed:
         if scene.model.plant.HasBodyNamed(link_a) and scene.model.plant.HasBodyNamed(link_b):
@@ -261,12 +261,14 @@ def _yaw_only(obj: SceneObject) -> float | None:
     return float(math.atan2(R[1, 0], R[0, 0]))
 
 
-def _replace(scene, objects: list[SceneObject], attached: list[SceneObject]) -> None:
+def _replace(scene, objects: list[SceneObject], attached: list[SceneObject], where: str) -> None:
     """Checks names, then replaces the scene's world objects (and held ones when given)."""
     names = [o.name for o in objects + attached]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
-        raise PlanningError(ErrorCode.INVALID_SCENE, f"duplicate object names {duplicates}")
+        raise PlanningError(
+            ErrorCode.INVALID_SCENE, f"{where}: duplicate object names {duplicates}"
+        )
     scene.clear()
     if attached:
         for name in list(scene.attached_objects):

@@ -95,17 +95,42 @@ def test_plot_writes_a_png(dut, tmp_path):
     assert (tmp_path / "plan.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_replay_without_meshcat_is_a_no_op(dut, scene):
-    dut.replay(scene, realtime=False)
+def test_replay_without_meshcat_is_a_no_op(dut, scene, monkeypatch):
+    """Nothing is published, nothing waits (even in real time), the scene is untouched."""
+    published, slept = [], []
+    monkeypatch.setattr(scene, "publish", published.append)
+    monkeypatch.setattr(mut.time, "sleep", slept.append)
+    version, fingers = scene.version, scene.finger_positions
+    assert dut.replay(scene) is None
+    assert published == [] and slept == []
+    assert scene.version == version
+    np.testing.assert_array_equal(scene.finger_positions, fingers)
 
 
-def test_replay_in_meshcat(dut):
+def test_replay_in_meshcat(dut, monkeypatch):
     from pydrake.geometry import Meshcat
 
     meshcat = Meshcat()
     shown = PlanningScene(meshcat=meshcat)
+    fingers = [0.01, 0.01]
+    shown.finger_positions = fingers
+    published = []
+
+    def publish(q):
+        published.append((np.array(q), shown.finger_positions))
+        PlanningScene.publish(shown, q)
+
+    monkeypatch.setattr(shown, "publish", publish)
     dut.replay(shown, dt=0.2, realtime=False)
     assert meshcat.HasPath("planning/objects/world/table")
+    # One frame every dt from the start to the end, with the plan's fingers; then the scene's.
+    ts, qs = dut.sample_many(0.2)
+    assert len(published) == len(ts)
+    np.testing.assert_allclose([q for q, _ in published], qs)
+    np.testing.assert_allclose(published[-1][0], EXTENDED, atol=1e-12)
+    for _, shown_fingers in published:
+        np.testing.assert_array_equal(shown_fingers, dut.finger_positions)
+    np.testing.assert_array_equal(shown.finger_positions, fingers)
 
 
 def arc_path(n=41, step=0.015, curvature=0.5):

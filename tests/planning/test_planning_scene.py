@@ -1,4 +1,4 @@
-"""PlanningScene: run-time objects, attaching, queries, YAML in and out, Meshcat display."""
+"""PlanningScene: run-time objects, attaching, queries, Meshcat display."""
 
 import numpy as np
 import pytest
@@ -135,91 +135,6 @@ def test_bad_input(dut, ready):
     with pytest.raises(PlanningError):
         dut.allow_collision("panda_hand", "panda_tail")
     assert list(dut.world_objects) == ["table"]
-
-
-def test_our_yaml_round_trips(dut, tmp_path):
-    text = """
-table: {size: [1.0, 1.0, 0.04], position: [0.3, 0.0, -0.02]}
-object: {size: [0.04, 0.04, 0.08], position: [0.5, 0.1, 0.04], mass: 0.1, yaw: 0.3}
-obstacle: {size: [0.05, 0.3, 0.2], position: [0.5, -0.1, 0.1]}
-place: {position: [0.5, -0.3, 0.04]}
-objects:
-  - {name: can, shape: cylinder, size: [0.03, 0.12], position: [0.4, 0.3, 0.06],
-     orientation: [0, 0, 0.3826834, 0.9238795]}
-  - {name: ball, shape: sphere, size: [0.05], position: [0.3, 0.4, 0.05]}
-"""
-    path = tmp_path / "scene.yaml"
-    path.write_text(text)
-    dut.load_yaml(path)
-    objects = dut.world_objects
-    assert sorted(objects) == ["ball", "can", "object", "obstacle", "table"]
-    assert objects["object"].X_PO.rotation().ToRollPitchYaw().yaw_angle() == pytest.approx(0.3)
-    assert objects["can"].size == (0.03, 0.12)
-    np.testing.assert_allclose(dut.place_position, [0.5, -0.3, 0.04])
-    out = tmp_path / "saved.yaml"
-    dut.save_yaml(out)
-    dut.clear()
-    dut.load_yaml(out)
-    for name, obj in objects.items():
-        again = dut.world_objects[name]
-        assert again.shape == obj.shape and again.size == pytest.approx(obj.size)
-        assert again.X_PO.IsNearlyEqualTo(obj.X_PO, 1e-9)
-    np.testing.assert_allclose(dut.place_position, [0.5, -0.3, 0.04])
-
-
-@pytest.mark.parametrize(
-    "text, match",
-    [
-        ("table: {size: [1, 1, 1], position: [0, 0]}", "3 values"),
-        ("table: {size: [1, 1], position: [0, 0, 0]}", "3 size values"),
-        ("obstacle: {size: [1, 1, 1], position: [0, .nan, 0]}", "finite"),
-        ("objects: [{name: x, shape: blob, size: [1], position: [0, 0, 0]}]", "shape"),
-        ("tabel: {size: [1, 1, 1]}", "unknown"),
-        ("table: {size: [1, 1, 1]", "while parsing|expected"),
-        (
-            "objects: [{name: a, shape: sphere, size: [0.1], position: [0, 0, 1]},"
-            " {name: a, shape: sphere, size: [0.1], position: [0, 0, 2]}]",
-            "duplicate",
-        ),
-    ],
-)
-def test_malformed_yaml_raises_with_a_clear_message(dut, tmp_path, text, match):
-    path = tmp_path / "bad.yaml"
-    path.write_text(text)
-    with pytest.raises(PlanningError, match=match) as info:
-        dut.load_yaml(path)
-    assert info.value.code == ErrorCode.INVALID_SCENE
-    assert list(dut.world_objects) == ["table"]  # a bad file leaves the scene as it was
-
-
-def test_moveit_scene_with_pose_multi_primitives_and_bad_types(dut, tmp_path):
-    path = tmp_path / "moveit.yaml"
-    path.write_text("""
-world:
-  collision_objects:
-    - id: shelf
-      pose: {position: [1.0, 0, 0], orientation: [0, 0, 0, 1]}
-      primitives: [{type: box, dimensions: [0.1, 0.2, 0.3]}, {type: 2, dimensions: [0.05]}]
-      primitive_poses:
-        - {position: [0, 0, 0.5], orientation: [0, 0, 0, 1]}
-        - {position: {x: 0, y: 0, z: 1}, orientation: {x: 0, y: 0, z: 0, w: 1}}
-""")
-    dut.load_moveit(path)
-    assert sorted(dut.world_objects) == ["shelf", "shelf#1"]
-    np.testing.assert_allclose(dut.world_objects["shelf#1"].X_PO.translation(), [1, 0, 1])
-    assert dut.world_objects["shelf#1"].shape == "sphere"
-    path.write_text(
-        "world: {collision_objects: [{id: c, primitives: [{type: cone, "
-        "dimensions: [1, 1]}], primitive_poses: [{position: [0, 0, 0]}]}]}"
-    )
-    with pytest.raises(PlanningError, match="cone"):
-        dut.load_moveit(path)
-    path.write_text(
-        "world: {collision_objects: [{id: c, primitives: [{type: box, "
-        "dimensions: [1, 1, 1]}], primitive_poses: []}]}"
-    )
-    with pytest.raises(PlanningError, match="poses"):
-        dut.load_moveit(path)
 
 
 def test_meshcat_shows_attached_objects_in_another_colour(tmp_path):

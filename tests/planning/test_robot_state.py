@@ -1,6 +1,6 @@
 """RobotState: forward and inverse kinematics, named configurations, reading a diagram."""
 
-import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -9,6 +9,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 import planning as mut
+import planning.search.ik as ik_module
 from planning import ErrorCode, PlanningError
 
 N_POSES = 100
@@ -96,12 +97,23 @@ def test_ik_round_trips_fk(scene, dut, mode):
     assert solved >= 0.95 * N_POSES
 
 
-def test_ik_is_deterministic_and_seeded(dut):
+def test_ik_is_deterministic_and_seeded(scene, monkeypatch):
+    """Same target and seed, same answer; the solver is made once per RobotState."""
+    made = []
+
+    def solver(*args):
+        made.append(ik_module.IkSolver(*args))
+        return made[-1]
+
+    monkeypatch.setattr(mut.robot_state, "IkSolver", solver)
+    dut = mut.RobotState(scene)
     X_WE = dut.fk(dut.named("extended"))
     a = dut.ik(X_WE, q_seed=dut.named("transport"))
     b = dut.ik(X_WE, q_seed=dut.named("transport"))
     np.testing.assert_array_equal(a.q, b.q)
     assert a.attempts >= 1 and a.solve_time > 0
+    assert len(made) == 1
+    np.testing.assert_allclose(dut.q, dut.named("ready"))  # ik does not move the state
 
 
 def test_ik_without_target_solves_the_current_pose(dut):
@@ -109,19 +121,62 @@ def test_ik_without_target_solves_the_current_pose(dut):
     assert dut.fk(result.q).translation() == pytest.approx(dut.fk().translation(), abs=1.1e-3)
 
 
-def test_unreachable_pose_raises_no_ik_solution_quickly(dut):
-    start = time.perf_counter()
+class SolveSpy:
+    """Counts the nonlinear programs IK solves (wraps ``planning.search.ik.Solve``)."""
+
+    def __init__(self, monkeypatch):
+        self.calls = 0
+        self._solve = ik_module.Solve
+        monkeypatch.setattr(ik_module, "Solve", self)
+
+    def __call__(self, prog):
+        self.calls += 1
+        return self._solve(prog)
+
+
+class FakeClock:
+    """``time.perf_counter`` for the IK module: each reading is ``step`` s after the last."""
+
+    def __init__(self, monkeypatch, step):
+        self.now, self.step = 0.0, step
+        monkeypatch.setattr(ik_module, "time", SimpleNamespace(perf_counter=self))
+
+    def __call__(self):
+        self.now += self.step
+        return self.now
+
+
+def test_pose_beyond_reach_is_rejected_before_any_solve(dut, monkeypatch):
+    solves = SolveSpy(monkeypatch)
     with pytest.raises(PlanningError) as info:
         dut.ik(RigidTransform([1.5, 0.0, 0.3]))
     assert info.value.code == ErrorCode.NO_IK_SOLUTION
-    assert time.perf_counter() - start < 0.1
-    # Within the reach bound but unreachable in that orientation: bounded by the time budget.
-    start = time.perf_counter()
-    R_up = RotationMatrix()  # hand z up, at the edge of the workspace
+    assert "reach" in info.value.message
+    assert solves.calls == 0
+
+
+# Within the reach bound but unreachable in that orientation (hand z up, at the workspace's edge).
+X_UNREACHABLE = RigidTransform(RotationMatrix(), [0.0, 0.0, 1.3])
+
+
+def test_failing_ik_makes_every_restart_within_the_budget(dut, monkeypatch):
+    solves = SolveSpy(monkeypatch)
     with pytest.raises(PlanningError) as info:
-        dut.ik(RigidTransform(R_up, [0.0, 0.0, 1.3]), options=mut.IkOptions(time_budget=0.5))
+        dut.ik(X_UNREACHABLE, options=mut.IkOptions(max_restarts=3, time_budget=1e6))
     assert info.value.code == ErrorCode.NO_IK_SOLUTION
-    assert time.perf_counter() - start < 1.5
+    assert "after 4 attempts" in info.value.message
+    assert solves.calls == 4  # the seeded attempt and 3 restarts
+
+
+def test_time_budget_stops_the_restarts(dut, monkeypatch):
+    """On a clock where every reading is 1 s later, a 0.5 s budget allows the first attempt."""
+    solves = SolveSpy(monkeypatch)
+    FakeClock(monkeypatch, step=1.0)
+    with pytest.raises(PlanningError) as info:
+        dut.ik(X_UNREACHABLE, options=mut.IkOptions(max_restarts=20, time_budget=0.5))
+    assert info.value.code == ErrorCode.NO_IK_SOLUTION
+    assert "after 1 attempts" in info.value.message
+    assert solves.calls == 1
 
 
 def test_ik_rejects_bad_targets(dut):
