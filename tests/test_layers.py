@@ -17,7 +17,7 @@ PACKAGES = ("drake_sim", "planning", "diagrams")
 # Left to right. A prefix names a module or a package (and everything in it).
 LAYERS = (
     ("base", ("drake_sim", "drake_sim.base")),
-    ("robots", ("drake_sim.robots",)),
+    ("descriptions: robots and worlds", ("drake_sim.robots", "drake_sim.worlds")),
     ("systems", ("drake_sim.systems",)),
     (
         "planning: errors, config, model, paths, objects",
@@ -52,6 +52,8 @@ LAYERS = (
         (
             "drake_sim.flip",
             "drake_sim.flip_run",
+            "drake_sim.walle",
+            "drake_sim.walle_run",
             "drake_sim.view",
             "drake_sim.pickplace",
             "drake_sim.tools",
