@@ -2,7 +2,7 @@
 
 Every request checks its start and goal (limits, finite values, collisions naming the bodies),
 then finds a joint path: the straight line when it is collision-free, else RRT-Connect (batched,
-``planning.search.rrt_batch``) followed by shortcutting (``planning.search.shortcut``). Collision
+``planning.search.rrt``) followed by shortcutting (``planning.search.shortcut``). Collision
 queries go to conservative sphere models of the robot first (``planning.collision.sphere_checker``:
 what they prove free is free for Drake too) and to the scene's ``SceneGraphCollisionChecker`` for
 what they cannot decide. Every path is re-checked at ``validation.resolution`` (0.01 rad) before it

@@ -50,7 +50,7 @@ def _count(value, field: str, *, least: int) -> None:
 
 @dc.dataclass
 class RrtConnectOptions:
-    """RRT-Connect (``planning.search.rrt``; batched: ``planning.search.rrt_batch``)."""
+    """RRT-Connect (``planning.search.rrt``), ``batch`` extensions per collision query."""
 
     # rad, largest RRT-Connect extension (joint-space L2). Measured on MBM (--limit 5 and 15,
     # same runs as OMPL): step 1.0 with batch 16 beat 0.5 with batch 8 on median (100 vs

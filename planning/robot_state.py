@@ -170,7 +170,7 @@ class RobotState:
             options=options or self._ik_options,
         )
 
-    def make_reader(self, input_size: int = 18) -> RobotStateReader:
+    def make_reader(self, input_size: int = NUM_STATES) -> RobotStateReader:
         """Returns a new ``RobotStateReader`` to add to a diagram; ``read`` uses it after."""
         plant = self._scene.plant
         frame = plant.GetFrameByName(self._ee_frame, self._scene.model.instance)

@@ -4,8 +4,9 @@ A convex polytope P (its vertices and polygon faces) is covered by spheres in tw
 
 1. Greedy placement: candidate centres are points of a grid inside P, each with the radius
    ``depth + slack`` (depth: distance to P's boundary, so the sphere is the inscribed ball grown
-   by ``slack``); the candidate covering most still-uncovered coarse samples (surface and
-   interior points) is taken until every sample is covered (greedy set cover).
+   by ``slack``; a sample no grid point reaches, e.g. at a sharp corner, is a candidate of
+   radius ``slack`` itself); the candidate covering most still-uncovered coarse samples
+   (surface and interior points) is taken until every sample is covered (greedy set cover).
 2. Conservative radii: every point of a dense barycentric grid on each boundary triangle (the
    hull's vertices included) goes to the chosen sphere it is deepest in, and each radius becomes
    the farthest assigned point plus the grid's covering bound ``eps``: on a triangle whose
@@ -150,6 +151,16 @@ def cover_polytope(
         c = centres[k : k + 512]
         d2 = (c**2).sum(1)[:, None] + s2 - 2.0 * c @ samples.T
         covers[k : k + 512] = d2 <= (reach[k : k + 512] ** 2)[:, None]
+    # Samples that no grid candidate reaches (sharp corners, farther than depth + slack from
+    # every grid point) become candidates themselves: on the boundary, so of depth 0 (no inner
+    # ball) and reach ``slack``; then every sample is covered, at worst by itself.
+    lonely = samples[~covers.any(axis=0)]
+    if len(lonely):
+        extra = np.maximum(0.0, -(lonely @ planes[:, :3].T + planes[:, 3]).max(axis=1))
+        centres, depth = np.vstack([centres, lonely]), np.concatenate([depth, extra])
+        reach = depth + slack
+        d = np.linalg.norm(lonely[:, None, :] - samples[None, :, :], axis=2)
+        covers = np.vstack([covers, d <= reach[-len(lonely) :, None]])
     uncovered = np.ones(len(samples), dtype=bool)
     gain = covers.sum(axis=1)
     chosen = []

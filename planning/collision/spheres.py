@@ -221,7 +221,8 @@ class SphereCollisionModel:
     def _checked_body_pairs(self, present: list[int]) -> set[tuple[int, int]]:
         """Body pairs (a before b in ``present``) that Drake's checker checks: filtered
         neither by the checker nor in its SceneGraph model (the checker's queries honour
-        both)."""
+        both); a body whose shapes were added to the checker only (a held object) is checked
+        against every body the checker does not filter."""
         plant = self._scene.plant
         inspector = self._scene.checker.MakeStandaloneModelContext().GetQueryObject().inspector()
         geometries = {
@@ -232,7 +233,11 @@ class SphereCollisionModel:
             for b in present[i + 1 :]:
                 if self._filtered[a, b] != 0:
                     continue
-                if any(
+                if not geometries[a] or not geometries[b]:
+                    # Shapes added to the checker (held objects, on the attachment body) are
+                    # not in its SceneGraph model: only the checker's own filter applies.
+                    pairs.add((a, b))
+                elif any(
                     not inspector.CollisionFiltered(g, h)
                     for g in geometries[a]
                     for h in geometries[b]

@@ -21,7 +21,6 @@ from planning.collision.sphere_checker import SphereCheckerAdapter
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
 from planning.search.rrt import rrt_connect
-from planning.search.rrt_batch import rrt_connect_batch
 from planning.search.shortcut import shortcut
 
 
@@ -98,13 +97,18 @@ class JointPathSearch:
         )
 
     def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
-        """RRT-Connect, batched (``planning.search.rrt_batch``) when ``rrt.batch`` > 1."""
+        """RRT-Connect (``planning.search.rrt``) with ``rrt.batch`` extensions per query."""
         opts = self._options.rrt
-        step = step or opts.step
-        kwargs = dict(step=step, goal_bias=opts.goal_bias, deadline=deadline, rng=rng)
-        if opts.batch > 1:
-            return rrt_connect_batch(adapter, q_a, q_b, batch=opts.batch, **kwargs)
-        return rrt_connect(adapter, q_a, q_b, **kwargs)
+        return rrt_connect(
+            adapter,
+            q_a,
+            q_b,
+            step=step or opts.step,
+            goal_bias=opts.goal_bias,
+            deadline=deadline,
+            rng=rng,
+            batch=opts.batch,
+        )
 
     def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
         from planning.search.kto import kto_refine

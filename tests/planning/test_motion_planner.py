@@ -6,7 +6,7 @@ import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
 import planning.motion_planner as mut
-from planning import ErrorCode, PlanningError, PlanningScene
+from planning import ErrorCode, Plan, PlanningError, PlanningScene, PlanResult
 from planning.planner_options import KtoOptions, RrtConnectOptions, TimingOptions, ValidationOptions
 
 # m, p_WO of the object's centre, 2 mm above the table: a held object touching the table counts
@@ -50,6 +50,7 @@ def above(p, height):
 def test_joint_goal_from_current_state(dut, scene):
     goal = dut.state.named("extended")
     result = dut.plan_to_joints(goal)
+    assert isinstance(result, PlanResult) and isinstance(result.trajectory, Plan)
     assert result.success and result.code is None
     path = result.trajectory.waypoints
     np.testing.assert_allclose(path[0], dut.state.q)

@@ -208,9 +208,14 @@ def test_reader_reports_the_latest_joints_from_a_diagram(dut):
     builder = DiagramBuilder()
     source = builder.AddSystem(ConstantVectorSource(np.concatenate([q, np.zeros(9)])))
     reader = builder.AddSystem(dut.make_reader(input_size=18))
+    assert isinstance(reader, mut.RobotStateReader)
     builder.Connect(source.get_output_port(), reader.get_input_port())
     diagram = builder.Build()
     context = diagram.CreateDefaultContext()
+    reader_context = reader.GetMyContextFromRoot(context)
+    np.testing.assert_allclose(reader.GetOutputPort("q").Eval(reader_context), q)
+    X_WE_port = reader.GetOutputPort("X_WE").Eval(reader_context)
+    assert X_WE_port.IsNearlyEqualTo(dut.fk(q), 1e-12)
     q_read, X_WE = dut.read(context)
     np.testing.assert_allclose(q_read, q[:7])
     np.testing.assert_allclose(dut.q_full, q)
@@ -225,3 +230,9 @@ def test_read_plant_context(scene, dut):
     q_read, X_WE = dut.read_plant_context(plant, context, scene.model.instance)
     np.testing.assert_allclose(q_read, q[:7])
     assert X_WE.IsNearlyEqualTo(dut.fk(q), 1e-12)
+
+
+def test_reader_needs_the_panda_positions(scene):
+    frame = scene.plant.GetFrameByName("panda_hand_tcp")
+    with pytest.raises(ValueError, match="at least 9 values"):
+        mut.RobotStateReader(plant=scene.plant, frame=frame, input_size=8)

@@ -1,5 +1,6 @@
-"""IRIS regions (cached on disk) and GCS paths through them on the pick-and-place scene, every
-path re-checked independently at 0.01 rad."""
+"""GCS paths (planning.search.gcs) through IRIS regions on the pick-and-place scene, every path
+re-checked independently at 0.01 rad; the regions CLI and the planner's use of GCS. The regions
+themselves are tested in test_iris_regions."""
 
 import os
 import subprocess
@@ -56,42 +57,6 @@ def assert_fine_collision_free(scene, path, resolution=0.01):
         n = max(1, int(np.ceil(np.linalg.norm(b - a) / resolution)))
         for s in np.linspace(0.0, 1.0, n + 1):
             assert scene.is_collision_free(a + s * (b - a)), f"collision at {a + s * (b - a)}"
-
-
-def test_regions_cover_the_seeds_and_are_cached(scene, seeds, regions, cache):
-    assert not regions.loaded and regions.path.is_file() and regions.path.parent == cache
-    assert len(regions.regions) >= 2
-    assert all(regions.containing(q) for q in seeds)
-    again = regions_mut.load_or_build_regions(scene, seeds, CHEAP, folder=cache)
-    assert again.loaded and again.key == regions.key
-    for a, b in zip(regions.regions, again.regions, strict=True):
-        np.testing.assert_array_equal(a.A(), b.A())
-        np.testing.assert_array_equal(a.b(), b.b())
-
-
-def test_the_key_changes_with_the_scene_seeds_and_options(scene, seeds):
-    key = regions_mut.region_key(scene, seeds, CHEAP)
-    assert regions_mut.region_key(scene, seeds, CHEAP) == key
-    assert regions_mut.region_key(scene, seeds[:2], CHEAP) != key
-    assert regions_mut.region_key(scene, seeds, regions_mut.RegionOptions()) != key
-    obstacle = scene.world_objects["obstacle"].X_PO
-    scene.move_object("obstacle", RigidTransform(obstacle.translation() + [0, 0.01, 0]))
-    try:
-        assert regions_mut.region_key(scene, seeds, CHEAP) != key
-    finally:
-        scene.move_object("obstacle", obstacle)
-    assert regions_mut.region_key(scene, seeds, CHEAP) == key
-
-
-def test_bad_seeds_and_options_are_rejected(scene, seeds, cache):
-    with pytest.raises(ValueError, match="collides"):
-        regions_mut.load_or_build_regions(scene, [[0, 1.7, 0, -0.5, 0, 0.5, 0]], folder=cache)
-    with pytest.raises(ValueError, match="shape"):
-        regions_mut.load_or_build_regions(scene, np.zeros((2, 6)), folder=cache)
-    with pytest.raises(ValueError, match="RegionOptions"):
-        regions_mut.load_or_build_regions(
-            scene, seeds, regions_mut.RegionOptions(epsilon=0.0), folder=cache
-        )
 
 
 def test_gcs_over_the_obstacle_is_collision_free(scene, seeds, regions):

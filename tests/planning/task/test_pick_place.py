@@ -7,6 +7,7 @@ import pytest
 
 import planning.task.pick_place as mut
 from diagrams.pickplace_scenario import load_pickplace_scenario
+from planning import StepReport, TaskReport
 from planning.io.scene_files import BoxSpec
 from planning.task.geometry import boxes_overlap
 from tests.pickplace_helpers import random_scene, run_task
@@ -41,7 +42,8 @@ class ObstacleWatch:
 def test_default_task_succeeds(config, mode):
     watch = ObstacleWatch(config)
     report, _ = run_task(config, mode, monitor=watch)
-    assert report.success, report.reason
+    assert isinstance(report, TaskReport) and report.success, report.reason
+    assert all(isinstance(s, StepReport) for s in report.steps)
     assert [s.name for s in report.steps] == STEPS and all(s.success for s in report.steps)
     assert report.place_error_m <= 0.02
     assert watch.overlaps == 0  # never through the obstacle

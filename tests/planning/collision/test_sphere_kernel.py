@@ -1,0 +1,214 @@
+"""The compiled sphere kernel (planning.collision.sphere_kernel)."""
+
+import importlib.util
+import uuid
+
+import numba.core.config
+import pytest
+
+import planning.collision.sphere_kernel as mut
+
+# ---------------------------------------------------------------------------------------------
+# Compile note: ``announce_compile`` says on stderr, once per process, that the kernel is being
+# compiled, only when numba's on-disk cache is cold (``cache_is_cold``). No test here waits for
+# a real cold compile of the kernel: the predicate is replaced, or tried on a tiny function.
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def fresh_process(monkeypatch):
+    """As in a new process: announce_compile has not looked yet (restored afterwards)."""
+    monkeypatch.setattr(mut, "_announce_done", False)
+    return monkeypatch
+
+
+def test_note_once_per_process_when_the_cache_is_cold(fresh_process, capsys):
+    fresh_process.setattr(mut, "cache_is_cold", lambda dispatcher=None: True)
+    assert mut.announce_compile()
+    assert not mut.announce_compile()
+    out, err = capsys.readouterr()
+    assert err == mut.COMPILE_NOTE + "\n" and out == ""
+    assert "compiling the collision kernel" in mut.COMPILE_NOTE
+
+
+def test_no_note_when_the_cache_is_warm_and_one_look_only(fresh_process, capsys):
+    looks = []
+    fresh_process.setattr(mut, "cache_is_cold", lambda dispatcher=None: looks.append(1) or False)
+    assert not mut.announce_compile()
+    assert not mut.announce_compile()
+    assert looks == [1]
+    assert capsys.readouterr() == ("", "")
+
+
+def test_a_sphere_model_announces_before_its_first_kernel_call(fresh_process, capsys):
+    from planning import PlanningScene
+    from planning.collision.spheres import SphereCollisionModel
+
+    fresh_process.setattr(mut, "cache_is_cold", lambda dispatcher=None: True)
+    model = SphereCollisionModel(PlanningScene(), 0.015)  # warms the kernel up: classify
+    model.classify([[0.0] * 7])
+    assert capsys.readouterr().err.count(mut.COMPILE_NOTE) == 1
+
+
+def _load_module(path):
+    """Imports ``path`` under a new name: a new dispatcher reading the cache, as a new process."""
+    spec = importlib.util.spec_from_file_location(f"tiny_{uuid.uuid4().hex}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_cache_is_cold_follows_numbas_on_disk_cache(tmp_path, monkeypatch):
+    monkeypatch.setattr(numba.core.config, "CACHE_DIR", "")  # the cache beside the source
+    source = tmp_path / "tiny_kernel.py"
+    source.write_text(
+        "from numba import njit\n\n\n@njit(cache=True)\ndef add(a, b):\n    return a + b\n"
+    )
+    first = _load_module(source)
+    assert mut.cache_is_cold(first.add)  # nothing cached yet
+    assert first.add(1, 2) == 3
+    assert sum(first.add.stats.cache_misses.values()) == 1  # it did compile
+    assert not mut.cache_is_cold(first.add)  # compiled in this process
+
+    second = _load_module(source)
+    assert not mut.cache_is_cold(second.add)  # cached on disk
+    assert second.add(1, 2) == 3
+    assert sum(second.add.stats.cache_hits.values()) == 1  # it did load
+
+    source.write_text(source.read_text().replace("a + b", "b + a + 0"))  # cache now stale
+    assert mut.cache_is_cold(_load_module(source).add)
+
+
+def test_cache_is_cold_without_a_cache_says_false():
+    uncached = numba.njit(lambda a: a)
+    assert not mut.cache_is_cold(uncached)  # no on-disk cache to ask: no note
+    assert not mut.cache_is_cold(lambda a: a)  # not a dispatcher at all
+
+
+def test_the_kernel_is_cached_once_loaded():
+    from planning import PlanningScene
+    from planning.collision.sphere_checker import sphere_model
+
+    sphere_model(PlanningScene())  # compiles or loads prefixes
+    assert not mut.cache_is_cold()
+    # A new dispatcher of the same function, as in the next process, finds it on disk.
+    assert not mut.cache_is_cold(numba.njit(cache=True)(mut.prefixes.py_func))
+
+
+# ---------------------------------------------------------------------------------------------
+# The kernel's verdicts, called directly on the KernelData a SphereCollisionModel packs for a
+# scene: the scan of segments (``prefixes``) agrees with classifying every sample on its own, a
+# configuration inside an obstacle is COLLIDING, one far from everything FREE, and a non-finite
+# configuration is never FREE.
+# ---------------------------------------------------------------------------------------------
+import numpy as np  # noqa: E402
+from pydrake.math import RigidTransform  # noqa: E402
+
+from planning import PlanningScene  # noqa: E402
+from planning.collision.checker import CheckerAdapter  # noqa: E402
+from planning.collision.sphere_checker import sphere_model  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def scene():
+    """The table and a wall in front of the robot."""
+    scene = PlanningScene()
+    scene.add_box("wall", [0.05, 0.8, 0.8], RigidTransform([0.45, 0.0, 0.4]))
+    return scene
+
+
+def kernel_data(scene) -> mut.KernelData:
+    """The arrays the scene's sphere model hands to the kernel, for the scene as it is now."""
+    model = sphere_model(scene)
+    model.sync()
+    return model._data
+
+
+def classify_each(qs, d):
+    """FREE, COLLIDING or UNKNOWN of each configuration alone: a segment of one sample, scanned
+    to the end (``stop_at_unknown`` off, so a later certain collision is still found)."""
+    qs = np.ascontiguousarray(qs, dtype=float)
+    first, n, edge, _ = mut.prefixes(qs, qs, 1.0, False, d)
+    assert np.all(n == 1)
+    state = np.where(first == 0, mut.COLLIDING, mut.FREE)
+    state[edge] = mut.UNKNOWN
+    return state
+
+
+def random_q(scene, n, seed):
+    adapter = CheckerAdapter(scene)
+    return np.random.default_rng(seed).uniform(adapter.lower, adapter.upper, (n, 7))
+
+
+def test_the_scan_of_segments_agrees_with_classifying_each_sample(scene):
+    """``prefixes`` stops each segment at its first COLLIDING sample (or its first uncertain
+    one with stop_at_unknown) and lists the UNKNOWN samples before it."""
+    d = kernel_data(scene)
+    qs = random_q(scene, 60, seed=6)
+    q_a, q_b, step = qs[:30], qs[30:], 0.1
+    kinds = set()
+    for stop_at_unknown in (False, True):
+        first, n, edge, local = mut.prefixes(q_a, q_b, step, stop_at_unknown, d)
+        np.testing.assert_array_equal(n, np.ceil(np.linalg.norm(q_b - q_a, axis=1) / step))
+        assert np.all(np.diff(edge) >= 0)  # by segment, then in order along it
+        for k in range(len(q_a)):
+            t = np.arange(1, n[k] + 1) / n[k]
+            state = classify_each(q_a[k] + t[:, None] * (q_b[k] - q_a[k]), d)
+            kinds |= set(state.tolist())
+            blocking = (state != mut.FREE) if stop_at_unknown else (state == mut.COLLIDING)
+            expected = int(np.argmax(blocking)) if blocking.any() else n[k]
+            assert first[k] == expected
+            unknown = np.flatnonzero(state[:expected] == mut.UNKNOWN)
+            np.testing.assert_array_equal(local[edge == k], unknown)
+    assert kinds == {mut.FREE, mut.COLLIDING, mut.UNKNOWN}  # every verdict was met
+
+
+def test_verdicts_agree_with_drakes_checker(scene):
+    """FREE only where Drake finds no collision, COLLIDING only where it finds one."""
+    d = kernel_data(scene)
+    qs = random_q(scene, 300, seed=7)
+    state = classify_each(qs, d)
+    full = np.tile(scene.full_q(np.zeros(7)), (len(qs), 1))
+    full[:, scene.model.arm_indices] = qs
+    free = np.array([scene.checker.CheckConfigCollisionFree(q) for q in full])
+    assert not np.any((state == mut.FREE) & ~free)
+    assert not np.any((state == mut.COLLIDING) & free)
+    assert np.mean(state != mut.UNKNOWN) > 0.8
+
+
+def test_inside_an_obstacle_is_colliding_and_far_from_everything_is_free(scene):
+    ready = scene.model.named_configurations["ready"]
+    p_hand = scene.attachment_pose(ready).translation()
+    assert classify_each(ready[None], kernel_data(scene))[0] == mut.FREE
+    scene.add_box("far", [0.2, 0.2, 0.2], RigidTransform(p_hand + [0.0, 0.0, 1.5]))
+    try:
+        assert classify_each(ready[None], kernel_data(scene))[0] == mut.FREE
+    finally:
+        scene.remove_object("far")
+    scene.add_box("block", [0.3, 0.3, 0.3], RigidTransform(p_hand))  # the hand inside it
+    try:
+        d = kernel_data(scene)
+        assert classify_each(ready[None], d)[0] == mut.COLLIDING
+        for stop_at_unknown in (False, True):
+            first, n, edge, _ = mut.prefixes(ready[None], ready[None], 0.1, stop_at_unknown, d)
+            assert first[0] == 0 and n[0] == 1 and len(edge) == 0
+    finally:
+        scene.remove_object("block")
+    assert classify_each(ready[None], kernel_data(scene))[0] == mut.FREE
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_configuration_is_never_free(scene, bad):
+    d = kernel_data(scene)
+    ready = scene.model.named_configurations["ready"]
+    qs = np.tile(ready, (7, 1))
+    qs[np.arange(7), np.arange(7)] = bad  # each joint in turn
+    assert np.all(classify_each(qs, d) == mut.UNKNOWN)
+    # A segment to a non-finite end has one sample, its end, which is not free.
+    starts = np.tile(ready, (7, 1))
+    first, n, edge, local = mut.prefixes(starts, qs, 0.1, True, d)
+    assert np.all(n == 1) and np.all(first == 0)
+    first, n, edge, local = mut.prefixes(starts, qs, 0.1, False, d)
+    assert np.all(first == 1)  # not certainly colliding either: left to Drake
+    np.testing.assert_array_equal(edge, np.arange(7))
+    np.testing.assert_array_equal(local, 0)
