@@ -82,14 +82,17 @@ class MotionPlanner:
 
     @property
     def scene(self):
+        """The ``PlanningScene`` every request is planned and checked in."""
         return self._scene
 
     @property
     def options(self) -> MotionPlannerOptions:
+        """The options, checked when the planner was made."""
         return self._options
 
     @property
     def state(self) -> RobotState:
+        """The current state requests start from unless given ``q_start``."""
         return self._state
 
     # ------------------------------------------------------------------------ requests ----
