@@ -10,50 +10,59 @@ the ``RobotState`` at the latest measured joints. Long actions either block (``e
 ``progress``. The simulation runs in simulated time: it advances while you wait on a handle's
 ``result()`` or call ``advance``, and only then, so tests are deterministic.
 
+No call hangs: durations, timeouts and finger positions that are not finite numbers in range
+raise ``ValueError`` naming the argument (and change nothing), every wait is bounded (at most
+``MAX_WAIT`` s per call; an action by its deadline), and ``close()`` (or leaving a ``with``
+block) ends everything, after which calls raise ``RuntimeError("the interface is closed")``.
+
 Typical use::
 
-    mpi = make_planning_station(load_pickplace_scenario(), mode="kinematic")  # diagrams
-    result = mpi.move_to_pose(X_WG)                           # plan, check, execute, wait
-    handle = mpi.execute_async(mpi.planner.plan_to_named("ready").trajectory)
-    while not handle.done():
-        mpi.advance(0.1)                                      # ... other work here ...
+    with make_planning_station(load_pickplace_scenario(), mode="kinematic") as mpi:
+        result = mpi.move_to_pose(X_WG)                       # plan, check, execute, wait
+        handle = mpi.execute_async(mpi.planner.plan_to_named("ready").trajectory)
+        while not handle.done():
+            mpi.advance(0.1)                                  # ... other work here ...
 """
 
 from __future__ import annotations
 
 import concurrent.futures
+import math
 from collections.abc import Callable
 
 import numpy as np
-from pydrake.math import RigidTransform
-from pydrake.systems.analysis import Simulator
 
 from planning.errors import ErrorCode, PlanningError
-from planning.execution.commander import ArmCommand, GripperCommand, ObjectFollower, PandaCommander
-from planning.execution.handles import ActionHandle, ExecutionResult, PlanHandle, submit
-from planning.execution.options import InterfaceOptions
-from planning.model.layout import (
-    ARM_V,
-    FINGER_CLOSED,
-    FINGER_OPEN,
-    FINGER_Q,
-    FINGER_V,
-    NUM_POSITIONS,
+from planning.execution.commander import ArmCommand, GripperCommand
+from planning.execution.gate import check_before_motion
+from planning.execution.handles import (
+    ActionHandle,
+    ExecutionResult,
+    PlanHandle,
+    check_duration,
+    submit,
 )
-from planning.model.panda import ATTACHMENT_BODY
+from planning.execution.options import InterfaceOptions
+from planning.execution.station_link import StationLink
+from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, FINGER_Q
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 from planning.robot_state import RobotState
 
-"""Each finger's fully open position, m."""
 
-
-class MotionPlanningInterface:
+class MotionPlanningInterface(StationLink):
     """Planning and execution for a user's code on one shared robot state and scene.
+
+    Joining the station, advancing, reading and judging actions: ``StationLink``. A context
+    manager: ``with`` ... ``as mpi`` closes it on the way out (``close``).
 
     Args:
         scene: the ``PlanningScene`` (kept in sync by the user: add obstacles, attach objects).
         planner_options: ``MotionPlanner`` options; ``MotionPlannerOptions()`` when None.
         options: execution settings.
+
+    Raises:
+        ValueError: an option's time (settle_time, settle_timeout, finger_settle_timeout) is
+            not a number of seconds in [0, MAX_WAIT], or poll_period not one in (0, MAX_WAIT].
     """
 
     def __init__(
@@ -63,169 +72,89 @@ class MotionPlanningInterface:
         *,
         options: InterfaceOptions | None = None,
     ):
-        self.scene = scene
-        self.state = RobotState(scene)
+        super().__init__(scene, RobotState(scene), options or InterfaceOptions())
         self.planner = MotionPlanner(scene, planner_options, state=self.state)
-        self.options = options or InterfaceOptions()
-        self._commander: PandaCommander | None = None
-        self._follower: ObjectFollower | None = None
-        self._station = None
-        self._simulator: Simulator | None = None
-        self._arm: ActionHandle | None = None
-        self._gripper: ActionHandle | None = None
         self._executor: concurrent.futures.ThreadPoolExecutor | None = None
-        self._monitors: list[Callable[[MotionPlanningInterface], None]] = []
+        self._plans: list[PlanHandle] = []  # requests not known to be over
 
-    # ------------------------------------------------------------------ joining a diagram ----
-    def add_to_builder(self, builder, station) -> None:
-        """Adds the command source (and, for a kinematic station, the object follower) to a
-        user's ``DiagramBuilder`` and connects them to ``station``'s ports.
+    # ------------------------------------------------------------------------- closing ----
+    def close(self) -> None:
+        """Ends the interface: cancels the running arm and gripper actions (their results:
+        PREEMPTED, "cancelled: the interface was closed") and the planning requests (their
+        ``result()`` raises PREEMPTED), and shuts the planning thread down, waiting for a
+        request that is running (its planner timeout bounds it). Closing again does nothing.
 
-        Args:
-            builder: the builder that holds ``station``.
-            station: a system with ``panda.position_command`` (input) and ``panda.state``
-                (output); optionally ``object.position_command`` (kinematic) and
-                ``object.pose``.
+        From then on every other call raises ``RuntimeError("the interface is closed")``.
         """
-        self._station = station
-        commander = builder.AddSystem(
-            PandaCommander(q_arm=self.state.q, finger=float(self.scene.finger_positions[0]))
-        )
-        commander.set_name("panda_commander")
-        builder.Connect(commander.get_output_port(), station.GetInputPort("panda.position_command"))
-        self._commander = commander
-        if station.HasInputPort("object.position_command") and "object" in self.scene.world_objects:
-            plant = self.scene.plant
-            follower = builder.AddSystem(
-                ObjectFollower(
-                    plant=plant,
-                    body=plant.GetBodyByName(ATTACHMENT_BODY),
-                    X_WO=self.scene.object_pose("object"),
-                )
-            )
-            follower.set_name("object_follower")
-            builder.Connect(station.GetOutputPort("panda.state"), follower.get_input_port())
-            builder.Connect(
-                follower.get_output_port(), station.GetInputPort("object.position_command")
-            )
-            self._follower = follower
-
-    def start(self, diagram, *, realtime_rate: float = 0.0) -> Simulator:
-        """Creates and initialises the simulator of the built ``diagram`` and reads the state.
-
-        Args:
-            diagram: the diagram built from the builder given to ``add_to_builder``.
-            realtime_rate: 0 runs as fast as possible; 1 paces the simulation at real time.
-        """
-        if self._commander is None:
-            raise RuntimeError("call add_to_builder() before start()")
-        self._simulator = Simulator(diagram)
-        self._simulator.set_target_realtime_rate(realtime_rate)
-        self._simulator.Initialize()
-        self.read_state()
-        return self._simulator
-
-    @property
-    def simulator(self) -> Simulator:
-        if self._simulator is None:
-            raise RuntimeError("the interface is not started: call start(diagram)")
-        return self._simulator
-
-    @property
-    def kinematic(self) -> bool:
-        """True when the station only plays motions back (no physics; objects follow the hand)."""
-        return self._follower is not None
-
-    @property
-    def time(self) -> float:
-        """Simulated time, s."""
-        return self.simulator.get_context().get_time()
-
-    def add_monitor(self, callback: Callable[[MotionPlanningInterface], None]) -> None:
-        """Calls ``callback(interface)`` after every ``poll_period`` of simulated time."""
-        self._monitors.append(callback)
-
-    # -------------------------------------------------------------------------- reading ----
-    def _context(self, system):
-        return system.GetMyMutableContextFromRoot(self.simulator.get_mutable_context())
-
-    def read_state(self) -> np.ndarray:
-        """Reads the Panda's 18 measured values (9 positions, 9 velocities), updates
-        ``state`` and returns them."""
-        x = self._station.GetOutputPort("panda.state").Eval(self._context(self._station))
-        self.state.set_q(x[:NUM_POSITIONS])
-        return np.array(x)
-
-    def object_pose(self):
-        """X_WO of the simulated object (the station's ``object.pose``), or None."""
-        if not self._station.HasOutputPort("object.pose"):
-            return None
-        X_WO = self._station.GetOutputPort("object.pose").Eval(self._context(self._station))
-        return RigidTransform(X_WO)  # a copy: Eval returns the port's cached value
-
-    # ------------------------------------------------------------------------ advancing ----
-    def advance(self, duration: float) -> None:
-        """Advances the simulation by ``duration`` s of simulated time."""
-        end = self.time + duration
-        self.advance_until(lambda: self.time >= end - 1e-12, duration)
-
-    def advance_until(self, condition: Callable[[], bool], timeout: float | None = None) -> None:
-        """Advances in steps of ``poll_period`` until ``condition()`` or ``timeout`` s pass."""
-        end = None if timeout is None else self.time + timeout
-        while not condition():
-            if end is not None and self.time >= end - 1e-12:
-                return
-            step_end = self.time + self.options.poll_period
-            if end is not None:
-                step_end = min(step_end, end)
-            self.simulator.AdvanceTo(step_end)
-            self._after_step()
-
-    def _after_step(self) -> None:
-        x = self.read_state()
-        if self._arm is not None and not self._arm.done():
-            self._check_arm(x)
-        if self._gripper is not None and not self._gripper.done():
-            self._check_gripper(x)
-        for monitor in self._monitors:
-            monitor(self)
+        try:
+            super().close()
+        finally:
+            for plan in self._plans:
+                if not plan.done():  # a finished one keeps its result
+                    plan.cancel("cancelled: the interface was closed")
+            if self._executor is not None:
+                self._executor.shutdown(wait=True, cancel_futures=True)
 
     # ------------------------------------------------------------------------- planning ----
     def plan_async(self, request: Callable, *args, **kwargs) -> PlanHandle:
         """Runs a planner request in a worker thread, from the current state unless
-        ``q_start`` is given, e.g. ``plan_async(mpi.planner.plan_to_pose, X_WG)``.
+        ``q_start`` is given, e.g. ``plan_async(mpi.planner.plan_to_pose, X_WG, timeout=2.0)``.
 
-        Do not change the scene while it runs."""
-        kwargs.setdefault("q_start", self.state.q)
+        Do not change the scene while it runs.
+
+        Raises:
+            ValueError: ``timeout`` (passed on to the request) is not a number of seconds in
+                (0, MAX_WAIT].
+        """
+        kwargs = self._request(kwargs)
+        timeout = kwargs.get("timeout") or self.planner.options.timeout
         if self._executor is None:
             self._executor = concurrent.futures.ThreadPoolExecutor(1, "motion_planning")
-        timeout = kwargs.get("timeout") or self.planner.options.timeout
-        return submit(self._executor, request, timeout, *args, **kwargs)
+        handle = submit(self._executor, request, timeout, *args, **kwargs)
+        self._plans = [plan for plan in self._plans if not plan.done()] + [handle]
+        return handle
+
+    def _request(self, kwargs: dict) -> dict:
+        """A planning request's keyword arguments, its ``timeout`` checked (ValueError unless
+        None or in (0, MAX_WAIT] s), starting from the joints now unless ``q_start`` is given."""
+        self._check_open()
+        check_duration("timeout", kwargs.get("timeout"), optional=True, positive=True)
+        return {"q_start": self.state.q, **kwargs}
 
     # ------------------------------------------------------------------------ execution ----
     def execute_async(self, plan) -> ActionHandle:
-        """Re-checks a plan against the current scene and starts it.
+        """Checks a plan against the robot and the scene as they are now, and starts it.
+
+        The check (``planning.execution.gate.check_before_motion``) is the one gate before
+        motion: finite values, the robot's position limits, its velocity and acceleration limits
+        (the planner's ``TimingOptions``), the start at the measured joints, no collision with
+        the measured fingers and the attached objects. A refused plan sends no command.
 
         Args:
             plan: a ``Plan`` or a successful ``PlanResult``.
 
         Raises:
-            PlanningError: INVALID_MOTION_PLAN (unsuccessful, or colliding in the scene now),
-                INVALID_START (the plan starts away from the robot, or the arm is busy).
+            PlanningError: INVALID_MOTION_PLAN (unsuccessful, or refused by the check, naming
+                the first violation), INVALID_START (the plan starts away from the robot, or
+                the arm is busy).
+            RuntimeError: the interface is closed.
         """
+        self._check_open()
         plan = self._as_plan(plan)
         if self._arm is not None and not self._arm.done():
             raise PlanningError(
                 ErrorCode.INVALID_START, "the arm is still executing a plan: wait or cancel it"
             )
-        self.read_state()
-        gap = float(np.max(np.abs(plan.waypoints[0] - self.state.q)))
-        if gap > self.options.start_tolerance:
-            raise PlanningError(
-                ErrorCode.INVALID_START,
-                f"the plan starts {gap:.3f} rad from the robot's current joints",
-            )
-        plan.validate(self.scene, self.planner.options.validation.resolution)
+        x = self.read_state()
+        check_before_motion(
+            plan,
+            self.scene,
+            self.state.q,
+            x[FINGER_Q],
+            self.planner.options.timing,
+            start_tolerance=self.options.start_tolerance,
+            resolution=self.planner.options.validation.resolution,
+        )
         t = self.time
         command = ArmCommand(q_hold=plan.waypoints[-1].copy(), plan=plan, t0=t)
         self._commander.set_arm(self._context(self._commander), command)
@@ -237,15 +166,16 @@ class MotionPlanningInterface:
         return self.execute_async(plan).result()
 
     def move_to_joints(self, q_goal, **kwargs) -> ExecutionResult:
-        """Plans from the current state to ``q_goal`` and executes (PlanningError if no plan)."""
-        return self.execute(self.planner.plan_to_joints(q_goal, q_start=self.state.q, **kwargs))
+        """Plans from the current state to ``q_goal`` and executes (PlanningError if no plan;
+        ValueError for a ``timeout`` not in (0, MAX_WAIT] s)."""
+        return self.execute(self.planner.plan_to_joints(q_goal, **self._request(kwargs)))
 
     def move_to_named(self, name: str, **kwargs) -> ExecutionResult:
-        return self.execute(self.planner.plan_to_named(name, q_start=self.state.q, **kwargs))
+        return self.execute(self.planner.plan_to_named(name, **self._request(kwargs)))
 
     def move_to_pose(self, X_WE=None, **kwargs) -> ExecutionResult:
         """Plans to a pose (or ``p_WE=`` / ``R_WE=`` alone) and executes."""
-        return self.execute(self.planner.plan_to_pose(X_WE, q_start=self.state.q, **kwargs))
+        return self.execute(self.planner.plan_to_pose(X_WE, **self._request(kwargs)))
 
     def move_cartesian(self, X_WE, **kwargs) -> ExecutionResult:
         """Plans a straight line to X_WE and executes it; a partial line is not executed.
@@ -253,8 +183,7 @@ class MotionPlanningInterface:
         Raises:
             PlanningError: PLANNING_FAILED naming the fraction achieved.
         """
-        result = self.planner.plan_cartesian(X_WE, q_start=self.state.q, **kwargs)
-        return self.execute(result)
+        return self.execute(self.planner.plan_cartesian(X_WE, **self._request(kwargs)))
 
     @staticmethod
     def _as_plan(plan):
@@ -269,56 +198,39 @@ class MotionPlanningInterface:
             raise PlanningError(ErrorCode.INVALID_MOTION_PLAN, "no plan to execute")
         return plan
 
-    def _check_arm(self, x: np.ndarray) -> None:
-        opts, handle = self.options, self._arm
-        command = self._commander.arm(self._context(self._commander))
-        t, end = self.time, command.end_time()
-        if t < end + opts.settle_time:
-            return
-        q, v = self.state.q, x[ARM_V]
-        if np.max(np.abs(v)) > opts.settle_velocity and t < end + opts.settle_timeout:
-            return
-        finger = float(np.mean(x[FINGER_Q]))
-        if command.stop_at is not None:
-            result = ExecutionResult(
-                False, ErrorCode.PREEMPTED, "cancelled", q, finger, handle.start_time, t
-            )
-            handle._finish(result, cancelled=True)
-            return
-        error = float(np.max(np.abs(q - command.plan.waypoints[-1])))
-        ok = error <= opts.goal_tolerance
-        message = f"reached the goal (largest joint error {error:.4f} rad)"
-        if not ok:
-            message = f"the arm ended {error:.4f} rad from the plan's end"
-        code = None if ok else ErrorCode.CONTROL_FAILED
-        handle._finish(ExecutionResult(ok, code, message, q, finger, handle.start_time, t))
-
     # -------------------------------------------------------------------------- gripper ----
     def move_gripper_async(self, position: float) -> ActionHandle:
         """Moves each finger to ``position`` (m, 0 closed .. 0.04 open) at ``finger_speed``.
 
         Closing on an object stops there (physics: the fingers squeeze it with their force
         limit; kinematic: they stop at its faces and the object follows the hand until the
-        gripper opens again).
+        gripper opens again). A gripper move still running is superseded: it finishes at once,
+        cancelled (PREEMPTED, "superseded by ...").
+
+        Raises:
+            ValueError: ``position`` is NaN or infinite, or ``options.finger_speed`` is not a
+                finite number > 0 (the command is refused, a running move goes on).
+            PlanningError: INVALID_GOAL, ``position`` is outside [0, 0.04] m.
         """
+        self._check_open()
+        if not math.isfinite(position):
+            raise ValueError(f"position must be a finite number of metres, not {position!r}")
         if not FINGER_CLOSED <= position <= FINGER_OPEN:
             raise PlanningError(
                 ErrorCode.INVALID_GOAL,
                 f"finger position {position} m is outside [{FINGER_CLOSED}, {FINGER_OPEN}]",
             )
-        if self._gripper is not None and not self._gripper.done():
-            self._gripper.cancel()
-        context = self._context(self._commander)
-        t = self.time
+        context, t = self._context(self._commander), self.time
         start = float(self._commander.gripper(context).sample(t))
-        target = position
-        if self._follower is not None:
-            follower_context = self._context(self._follower)
-            if position > start:
-                self._follower.release(follower_context)
-            else:
-                target = max(target, self._kinematic_contact(follower_context, start))
-        command = GripperCommand(start, target, t, self.options.finger_speed)
+        target, opening = position, position > start
+        if self._follower is not None and not opening:
+            target = max(target, self._kinematic_contact(self._context(self._follower), start))
+        command = GripperCommand(start, target, t, self.options.finger_speed)  # checks the speed
+        if self._gripper is not None and not self._gripper.done():
+            reason = f"superseded by a gripper move to {position} m"
+            self._end(self._gripper, ErrorCode.PREEMPTED, reason, cancelled=True)
+        if self._follower is not None and opening:
+            self._follower.release(self._context(self._follower))
         self._commander.set_gripper(context, command)
         self._gripper = ActionHandle(self, "gripper", t, command.end_time(), target=position)
         return self._gripper
@@ -347,46 +259,3 @@ class MotionPlanningInterface:
         if outside or abs(p[1]) + half[1] > opening:
             return 0.0
         return float(half[1] + abs(p[1]))
-
-    def _check_gripper(self, x: np.ndarray) -> None:
-        opts, handle = self.options, self._gripper
-        command = self._commander.gripper(self._context(self._commander))
-        t, end = self.time, command.end_time()
-        if t < end + opts.settle_time:
-            return
-        moving = np.max(np.abs(x[FINGER_V])) > opts.finger_settle_velocity
-        if moving and t < end + opts.finger_settle_timeout:
-            return
-        finger = float(np.mean(x[FINGER_Q]))
-        if handle.cancel_requested:
-            result = ExecutionResult(
-                False, ErrorCode.PREEMPTED, "cancelled", self.state.q, finger, handle.start_time, t
-            )
-            handle._finish(result, cancelled=True)
-            return
-        requested = handle.target
-        closing = command.target < command.start or requested < command.start
-        grasped = closing and finger > requested + opts.finger_tolerance
-        if grasped and self._follower is not None:
-            self._follower.grab(self._context(self._follower))
-        ok = grasped or abs(finger - requested) <= opts.finger_tolerance
-        what = "holding an object" if grasped else "reached"
-        message = f"fingers at {finger * 1000:.1f} mm each ({what})"
-        code = None if ok else ErrorCode.CONTROL_FAILED
-        result = ExecutionResult(
-            ok, code, message, self.state.q, finger, handle.start_time, t, grasped
-        )
-        handle._finish(result)
-
-    # --------------------------------------------------------------------------- cancel ----
-    def _cancel(self, handle: ActionHandle) -> None:
-        t = self.time
-        if handle is self._arm:
-            context = self._context(self._commander)
-            command = self._commander.arm(context)
-            accel = np.asarray(self.planner.options.timing.max_acceleration)
-            self._commander.set_arm(context, command.stopped(t, accel))
-        elif handle is self._gripper:
-            context = self._context(self._commander)
-            finger = float(self._commander.gripper(context).sample(t))
-            self._commander.set_gripper(context, GripperCommand(finger, finger, t))

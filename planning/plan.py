@@ -23,6 +23,13 @@ load with ``method: rest_to_rest`` (a stop at every waypoint), the timing they w
 Times are not stored: they follow from the waypoints, limits and timing options
 (``planning.timing.retime``), so a loaded plan samples exactly as the saved one. Floats are written
 with ``repr`` precision, so a plan loads back equal.
+
+``Plan.load`` and ``Plan.from_dict`` check every field against the schema of
+``planning.io.plan_files`` first: anything missing, unknown, non-finite, of the wrong type or
+length, out of range, or a file that is not UTF-8 JSON, raises
+``PlanningError(ErrorCode.INVALID_MOTION_PLAN)`` naming the file and the field
+(``waypoints[3][2]``). A loaded plan is checked against the robot itself before it moves it
+(``planning.execution.gate``).
 """
 
 from __future__ import annotations
@@ -37,13 +44,11 @@ import numpy as np
 
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
-from planning.model.layout import FINGER_OPEN, NUM_FINGERS
+from planning.io.plan_files import FORMAT, VERSION, check_plan_data, invalid, read_plan_json
+from planning.model.layout import FINGER_OPEN, NUM_ARM_JOINTS, NUM_FINGERS
 from planning.model.panda import ARM_JOINTS
 from planning.scene_objects import describe_scene
 from planning.timing.retime import RetimeOptions, Timing
-
-_FORMAT = "drake_sim.plan"
-_VERSION = 2
 
 
 @dataclass
@@ -83,8 +88,15 @@ class Plan:
         self.max_velocity = np.asarray(self.max_velocity, dtype=float)
         self.max_acceleration = np.asarray(self.max_acceleration, dtype=float)
         self.finger_positions = np.asarray(self.finger_positions, dtype=float)
-        if self.waypoints.shape[1] != 7 or len(self.waypoints) < 1:
+        if self.waypoints.shape[1] != NUM_ARM_JOINTS or len(self.waypoints) < 1:
             raise ValueError(f"waypoints must be (N, 7), got {self.waypoints.shape}")
+        sizes = {"max_velocity": NUM_ARM_JOINTS, "max_acceleration": NUM_ARM_JOINTS}
+        sizes.update(finger_positions=NUM_FINGERS, waypoints=self.waypoints.size)
+        for name, size in sizes.items():
+            value = getattr(self, name)
+            if value.size != size or not np.all(np.isfinite(value)):
+                shown = value.tolist() if value.size <= 2 * NUM_ARM_JOINTS else value.shape
+                raise ValueError(f"{name} must be {size} finite values, got {shown}")
         if np.any(self.max_velocity <= 0) or np.any(self.max_acceleration <= 0):
             raise ValueError("velocity and acceleration limits must be positive")
         if isinstance(self.timing, dict):
@@ -126,7 +138,7 @@ class Plan:
         """True when ``scene`` holds the same objects as the scene this plan was made for."""
         return _rounded(describe_scene(scene)) == _rounded(self.scene)
 
-    def validate(self, scene, resolution: float = 0.01) -> None:
+    def validate(self, scene, resolution: float = 0.01, *, finger_positions=None) -> None:
         """Re-checks the path against ``scene`` (e.g. just before execution): the straight
         segments between the waypoints, and the trajectory itself where it is smoothed (within
         ``timing.path_tolerance`` of those segments).
@@ -134,12 +146,15 @@ class Plan:
         Args:
             scene: the ``PlanningScene`` now (its objects may have changed since planning).
             resolution: joint-space L2 distance between checked configurations, rad.
+            finger_positions: (2,) m, the fingers during the check; the plan's when None (the
+                check before motion passes the measured ones).
 
         Raises:
             PlanningError: INVALID_MOTION_PLAN naming the colliding bodies.
         """
         saved = scene.finger_positions
-        scene.finger_positions = self.finger_positions
+        fingers = self.finger_positions if finger_positions is None else finger_positions
+        scene.finger_positions = fingers
         try:
             adapter = CheckerAdapter(scene)
             bad = first_invalid_segment(adapter, self.waypoints, resolution)
@@ -184,8 +199,8 @@ class Plan:
     # --------------------------------------------------------------------------- files ----
     def to_dict(self) -> dict:
         return {
-            "format": _FORMAT,
-            "version": _VERSION,
+            "format": FORMAT,
+            "version": VERSION,
             "robot": self.robot,
             "waypoints": self.waypoints.tolist(),
             "max_velocity": self.max_velocity.tolist(),
@@ -199,24 +214,30 @@ class Plan:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> Plan:
-        if data.get("format") != _FORMAT:
-            raise ValueError(f"not a plan file (format {data.get('format')!r})")
-        keys = [
-            "waypoints",
-            "max_velocity",
-            "max_acceleration",
-            "velocity_scaling",
-            "acceleration_scaling",
-            "finger_positions",
-            "scene",
-            "robot",
-            "info",
-        ]
-        if data.get("version", 1) > _VERSION:
-            raise ValueError(f"plan file version {data['version']} is newer than {_VERSION}")
-        timing = data.get("timing", {"method": "rest_to_rest"})
-        return cls(**{k: data[k] for k in keys if k in data}, timing=RetimeOptions(**timing))
+    def from_dict(cls, data: dict, where: str = "plan") -> Plan:
+        """Builds a plan from ``to_dict``'s form, every field checked first.
+
+        Args:
+            data: the decoded JSON of a plan file.
+            where: how error messages name the source (a file name).
+
+        Raises:
+            PlanningError: INVALID_MOTION_PLAN naming the first field at fault (see
+                ``planning.io.plan_files``), or saying that the fields give no finite timing.
+        """
+        fields = check_plan_data(data, where)
+        fields["timing"] = RetimeOptions(**fields["timing"])
+        try:
+            with np.errstate(all="ignore"):
+                plan = cls(**fields)
+        # pydrake reports a failed internal condition (TOPP-RA on a degenerate path) as SystemExit.
+        except (ValueError, RuntimeError, ArithmeticError, SystemExit) as e:
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise invalid(where, f"the waypoints cannot be timed within the limits: {first}") from e
+        if not (np.isfinite(plan.duration) and np.all(np.isfinite(plan._timing.times))):
+            message = f"the timing of the waypoints is not finite (duration {plan.duration} s)"
+            raise invalid(where, message)
+        return plan
 
     def save(self, filename: Path | str) -> None:
         """Writes the plan as JSON (see the module docstring)."""
@@ -224,8 +245,12 @@ class Plan:
 
     @classmethod
     def load(cls, filename: Path | str) -> Plan:
-        """Reads a plan written by ``save``."""
-        return cls.from_dict(json.loads(Path(filename).read_text()))
+        """Reads a plan written by ``save``.
+
+        Raises:
+            PlanningError: INVALID_MOTION_PLAN naming the file (and the field at fault).
+        """
+        return cls.from_dict(read_plan_json(filename), str(filename))
 
     def __eq__(self, other) -> bool:
         if not isinstance(other, Plan):

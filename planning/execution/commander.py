@@ -95,6 +95,14 @@ class GripperCommand:
     t0: float = 0.0
     speed: float = 0.05
 
+    def __post_init__(self):
+        """Raises ValueError for a command that would never end (or not be one): a speed that
+        is not finite and > 0, or positions and times that are not finite."""
+        if not (np.isfinite(self.speed) and self.speed > 0.0):
+            raise ValueError(f"speed must be a finite number of m/s > 0, not {self.speed!r}")
+        if not np.all(np.isfinite([self.start, self.target, self.t0])):
+            raise ValueError(f"start, target and t0 must be finite, not {self}")
+
     def end_time(self) -> float:
         return self.t0 + abs(self.target - self.start) / self.speed
 

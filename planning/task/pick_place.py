@@ -6,9 +6,11 @@ The steps (each reported as it ends, with its planning time):
 2. ``open_gripper``;
 3. ``approach``: a Cartesian line straight down until the object is between the fingers;
 4. ``close_gripper``: close until the fingers stop on the object;
-5. ``lift``: a short Cartesian line up;
-6. ``attach``: a box of the object's size, at its measured pose, is attached to the hand in the
-   PlanningScene (from here on the planner keeps it clear of the world);
+5. ``lift``: a box of the object's size, at its measured pose, is attached to the hand in the
+   PlanningScene (held: the closed fingers touch it, which the check before motion allows only
+   for an attached object), then a short Cartesian line up;
+6. ``attach``: the attached box is moved to the object's pose in the hand measured after the
+   lift (from here on the planner keeps it clear of the world);
 7. ``move_to_place``: plan over the obstacle to above the place target, then a Cartesian line
    down until the object is just above the table;
 8. ``release``: open, detach the object, retreat straight up (ignoring the object, which may
@@ -19,8 +21,9 @@ the task cannot work: no object or place target, an object too wide for the hand
 place target inside another object, no collision-free IK solution above the grasp or the place
 with a straight line down from there. Such a scene is reported impossible, not tried. The check
 also picks the grasp: the first top-down yaw, nearest the hand's, for which all of that works.
-While the planning scene plans the lift, the fingers are modelled open (the planning scene keeps
-``finger_positions`` at the open hand), so closing on the object is not a collision.
+The planner models the fingers open (the planning scene keeps ``finger_positions`` at the open
+hand); the check before each motion (``planning.execution.gate``) uses the measured fingers,
+which touch the object from ``close_gripper`` on: so it is attached before it is lifted.
 """
 
 from __future__ import annotations
@@ -237,7 +240,7 @@ class PickPlaceTask:
                 lambda: self._gripper(FINGER_OPEN),
                 self._approach,
                 self._close,
-                lambda: self._cartesian_up(self.options.lift_height),
+                self._lift,
                 self._attach,
                 self._move_to_place,
                 self._release,
@@ -321,16 +324,26 @@ class PickPlaceTask:
         target = self._up(self._mpi.state.hand_pose(), height)
         return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, target))
 
+    def _lift(self) -> str:
+        self._hold()
+        return self._cartesian_up(self.options.lift_height)
+
     def _attach(self) -> str:
+        self._hold()  # where the lift left the object in the hand
+        size = self._scene_object.size
+        return f"attached a {size[0]:.3f} x {size[1]:.3f} x {size[2]:.3f} m box"
+
+    def _hold(self) -> None:
+        """Attaches a box of the object's size to the hand at the object's measured pose (the
+        world object the first time, the attached box again after that)."""
         scene, q = self._scene, self._mpi.state.q
-        obj = scene.world_objects[OBJECT]
+        if OBJECT in scene.world_objects:
+            self._scene_object = scene.world_objects[OBJECT]
         X_WO = self._object_pose()
-        self._scene_object = obj
         scene.remove_object(OBJECT)
         X_AO = scene.attachment_pose(q).inverse() @ X_WO
-        scene.attach_new(SceneObject(OBJECT, "box", tuple(obj.size), X_AO))
+        scene.attach_new(SceneObject(OBJECT, "box", tuple(self._scene_object.size), X_AO))
         self._X_OG = X_WO.inverse() @ self._mpi.state.hand_pose()
-        return f"attached a {obj.size[0]:.3f} x {obj.size[1]:.3f} x {obj.size[2]:.3f} m box"
 
     def _move_to_place(self) -> str:
         X_WO_place = self._place_pose(self._object_pose())

@@ -1,5 +1,9 @@
 """MotionPlanningInterface on the Panda station, in simulated time: blocking and asynchronous
-use, failures that leave the robot still, cancellation."""
+use, failures that leave the robot still, cancellation, superseded and overdue actions, closing
+(the property and abuse tests of issue #14: test_interface_robustness.py)."""
+
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -172,3 +176,94 @@ def test_gripper_move_can_be_cancelled(dut):
     assert 0.02 < result.finger_position < FINGER_OPEN  # stopped part way
     dut.advance(0.3)
     assert dut.read_state()[7] == pytest.approx(result.finger_position, abs=1e-6)
+
+
+# ------------------------------------------------------- issue #14: never hangs or dies ----
+def test_plan_async_accepts_a_planning_timeout(dut):
+    handle = dut.plan_async(dut.planner.plan_to_pose, X_TARGET, timeout=30.0)
+    result = handle.result(timeout=60.0)
+    assert result.success and dut.execute(result).success
+
+
+def test_a_superseded_gripper_move_finishes_cancelled_with_the_reason(dut):
+    first = dut.move_gripper_async(0.0)
+    dut.advance(0.2)
+    second = dut.move_gripper_async(0.03)
+    assert first.done() and first.status == "cancelled"  # at once, no waiting
+    t = dut.time
+    outcome = first.result()
+    assert dut.time == t  # returned without advancing
+    assert outcome.code is ErrorCode.PREEMPTED and "superseded" in outcome.message
+    assert 0.02 < outcome.finger_position < FINGER_OPEN and outcome.end_time == t
+    final = second.result()
+    assert final.success and final.finger_position == pytest.approx(0.03, abs=2e-3)
+
+
+def test_an_arm_action_never_judged_is_stopped_at_its_deadline(dut):
+    plan = dut.planner.plan_to_pose(X_TARGET).trajectory
+    handle = dut.execute_async(plan)
+    assert handle.deadline >= plan.duration + dut.options.settle_timeout
+    context = dut._context(dut._commander)  # the arm's command now starts 100 s later
+    command = dut._commander.arm(context)
+    dut._commander.set_arm(context, type(command)(command.q_hold, plan, command.t0 + 100.0))
+    outcome = handle.result()
+    assert handle.status == "failed" and outcome.code is ErrorCode.TIMED_OUT
+    assert handle.deadline - 0.011 <= outcome.end_time <= handle.deadline
+    assert dut._commander.arm(context).stop_at == pytest.approx(outcome.end_time)  # stopped
+    dut.advance(0.5)
+    np.testing.assert_allclose(dut.read_state()[9:], 0.0, atol=1e-9)
+    assert dut.move_to_pose(X_TARGET).success  # and the arm works again
+
+
+def test_close_ends_actions_and_planning_then_every_call_raises(dut):
+    finished = dut.plan_async(dut.planner.plan_to_pose, X_TARGET)
+    arm = dut.execute_async(finished.result(timeout=60.0))
+    fingers = dut.move_gripper_async(0.0)
+    dut.advance(0.1)
+    started, release, ran = threading.Event(), threading.Event(), []
+
+    def running(*args, **kwargs):
+        started.set()
+        return release.wait(60.0)
+
+    first = dut.plan_async(running)
+    assert started.wait(60.0)
+    queued = dut.plan_async(lambda **kwargs: ran.append(kwargs))
+
+    def release_once_queued_is_cancelled():  # close() waits for the running request
+        for _ in range(60000):
+            if queued.done():
+                break
+            time.sleep(0.001)
+        release.set()
+
+    threading.Thread(target=release_once_queued_is_cancelled, daemon=True).start()
+    dut.close()
+    for handle in (arm, fingers):
+        outcome = handle.result()
+        assert handle.status == "cancelled" and outcome.code is ErrorCode.PREEMPTED
+        assert "the interface was closed" in outcome.message
+    for handle in (first, queued):
+        with pytest.raises(PlanningError, match="the interface was closed") as error:
+            handle.result(timeout=60.0)
+        assert error.value.code is ErrorCode.PREEMPTED
+    assert ran == []  # the queued request never ran
+    assert finished.result().success  # one over before closing keeps its result
+    calls = [
+        lambda: dut.execute_async(arm.plan),
+        lambda: dut.move_to_pose(X_TARGET),
+        lambda: dut.plan_async(dut.planner.plan_to_named, "ready"),
+        dut.close_gripper,
+        lambda: dut.advance(0.1),
+    ]
+    for call in calls:
+        with pytest.raises(RuntimeError, match="^the interface is closed$"):
+            call()
+    dut.close()  # closing again does nothing
+
+
+def test_planning_station_is_a_context_manager(config):
+    with make_planning_station(config, mode="kinematic") as mpi:
+        assert mpi.close_gripper().success
+    with pytest.raises(RuntimeError, match="closed"):
+        mpi.open_gripper()

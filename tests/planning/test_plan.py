@@ -70,8 +70,9 @@ def test_save_and_load_equal(dut, tmp_path):
 
 def test_load_rejects_other_files(tmp_path):
     (tmp_path / "x.json").write_text('{"format": "other"}')
-    with pytest.raises(ValueError):
+    with pytest.raises(PlanningError, match="x.json: format") as error:
         mut.Plan.load(tmp_path / "x.json")
+    assert error.value.code is ErrorCode.INVALID_MOTION_PLAN
 
 
 def test_validate_and_scene_matching(dut, scene):
@@ -195,7 +196,7 @@ def test_version_1_files_keep_their_rest_to_rest_timing(dut):
     assert old.timing.method == "rest_to_rest"
     np.testing.assert_allclose(old.stop_times, old.times)
     data["version"] = 99
-    with pytest.raises(ValueError, match="version"):
+    with pytest.raises(PlanningError, match="version 99 is newer"):
         mut.Plan.from_dict(data)
 
 

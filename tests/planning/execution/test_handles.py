@@ -1,9 +1,10 @@
 """Action and plan handles: done(), result(timeout), cancel(), progress and status.
 
 ActionHandle runs on a fake interface (a simulated clock with the interface's ``advance_until``)
-and once on a real ``MotionPlanningInterface`` joined to a stub station that tracks the command
+and on a real ``MotionPlanningInterface`` joined to a stub station that tracks the command
 perfectly; PlanHandle runs on a thread pool whose jobs wait on events, so nothing depends on
-wall-clock speed.
+wall-clock speed. Property test (hypothesis, derandomized): ``check_duration`` on any float
+(200 examples).
 """
 
 import concurrent.futures
@@ -12,23 +13,27 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from pydrake.systems.framework import DiagramBuilder, LeafSystem
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import planning.execution.handles as mut
 from planning import ErrorCode, PlanningError, PlanningScene
+from tests.planning.execution.stub_station import started_interface
 
 POLL = 0.01  # s of simulated time per step of the fake interface
+GRACE = 0.1  # s after its commanded end by which the fake interface judges an action
 
 
 class FakeInterface:
     """What ActionHandle uses of ``MotionPlanningInterface``: ``time``, ``advance_until`` (in
-    steps of POLL, finishing actions whose end has come) and ``_cancel`` (which, like the
-    interface, only ends the action at a later step)."""
+    steps of POLL, finishing actions whose end has come), ``_cancel`` (which, like the
+    interface, only ends the action at a later step), ``_grace`` and ``_expire``."""
 
     def __init__(self):
         self.time = 0.0
         self.steps = 0
         self.cancelled = []
+        self.expired = []
         self.ends = {}  # handle -> simulated time it finishes
 
     def start(self, duration, kind="execute"):
@@ -54,6 +59,13 @@ class FakeInterface:
     def _cancel(self, handle):
         self.cancelled.append(handle)
         self.ends[handle] = self.time + 0.05  # comes to rest
+
+    def _grace(self, kind):
+        return GRACE
+
+    def _expire(self, handle):
+        self.expired.append(handle)
+        handle._finish(result(False, handle.start_time, self.time, ErrorCode.TIMED_OUT))
 
 
 def result(success, start, end, code=None):
@@ -128,6 +140,73 @@ def test_failed_result_sets_failed_status():
     assert dut.kind == "gripper" and dut.target == 0.01 and dut.plan is None
     dut._finish(result(False, 0.0, 1.2, ErrorCode.CONTROL_FAILED))
     assert dut.status == mut.FAILED and dut.result().code is ErrorCode.CONTROL_FAILED
+
+
+def test_action_result_never_waits_past_its_deadline():
+    interface = FakeInterface()
+    dut = interface.start(0.5)
+    assert dut.deadline == pytest.approx(0.5 + GRACE)
+    interface.ends[dut] = float("inf")  # the interface never judges it
+    outcome = dut.result(timeout=100.0)
+    assert interface.expired == [dut] and interface.time == pytest.approx(dut.deadline)
+    assert not outcome.success and outcome.code is ErrorCode.TIMED_OUT
+    assert dut.status == mut.FAILED and dut.result() is outcome
+
+
+def test_action_result_without_timeout_is_bounded_too():
+    interface = FakeInterface()
+    dut = interface.start(0.3, kind="gripper")
+    interface.ends[dut] = float("inf")
+    assert dut.result().code is ErrorCode.TIMED_OUT
+    assert interface.time == pytest.approx(0.3 + GRACE)
+
+
+def test_a_later_rest_extends_the_deadline():
+    dut = FakeInterface().start(1.0)
+    dut._extend(0.5)  # earlier than the end: no change
+    assert dut.deadline == pytest.approx(1.0 + GRACE)
+    dut._extend(1.2)
+    assert dut.deadline == pytest.approx(1.2 + GRACE)
+    dut._finish(result(False, 0.0, 0.4, ErrorCode.TIMED_OUT))
+    dut._extend(5.0)  # over: its deadline stays
+    assert dut.deadline == pytest.approx(1.2 + GRACE)
+
+
+@pytest.mark.parametrize("timeout", [float("nan"), float("inf"), -float("inf"), -0.1, 1e300, "1"])
+def test_action_result_refuses_a_bad_timeout_and_keeps_running(timeout):
+    interface = FakeInterface()
+    dut = interface.start(0.5)
+    with pytest.raises(ValueError, match="timeout"):
+        dut.result(timeout=timeout)
+    assert interface.time == 0.0 and not dut.done()
+    assert dut.result().success
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -1.0, mut.MAX_WAIT * 1.01, True])
+def test_check_duration_refuses_and_names_the_argument(value):
+    with pytest.raises(ValueError, match="^my_timeout must be a number of seconds in"):
+        mut.check_duration("my_timeout", value)
+
+
+def test_check_duration_bounds_zero_and_none():
+    assert mut.check_duration("t", mut.MAX_WAIT) == mut.MAX_WAIT
+    assert mut.check_duration("t", np.float32(0.5)) == 0.5
+    assert mut.check_duration("t", None, optional=True) is None
+    with pytest.raises(ValueError, match=r"in \(0, "):
+        mut.check_duration("t", 0.0, positive=True)
+    with pytest.raises(ValueError):
+        mut.check_duration("t", None)
+
+
+@settings(max_examples=200, derandomize=True, deadline=None)
+@given(value=st.floats())
+def test_check_duration_property(value):
+    """Property: any float is returned unchanged when in [0, MAX_WAIT], else refused."""
+    if 0.0 <= value <= mut.MAX_WAIT:
+        assert mut.check_duration("d", value) == value
+    else:
+        with pytest.raises(ValueError, match="^d must"):
+            mut.check_duration("d", value)
 
 
 # --------------------------------------------------------------------------- PlanHandle ----
@@ -231,37 +310,64 @@ def test_cancelled_running_request_discards_its_result(executor):
     assert dut.status == mut.CANCELLED
 
 
+def test_submit_passes_a_timeout_argument_to_the_request(executor):
+    job = Job()
+    job.release.set()
+    dut = mut.submit(executor, job, 2.0, "goal", timeout=2.0)
+    assert dut.result(timeout=60.0) == "plan" and job.kwargs == {"timeout": 2.0}
+    for timeout in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="timeout"):
+            mut.submit(executor, job, timeout)
+
+
+@pytest.mark.parametrize("timeout", [float("nan"), float("inf"), -1.0])
+def test_plan_result_refuses_a_bad_timeout(executor, timeout):
+    job = Job()
+    dut = mut.submit(executor, job, 5.0)
+    with pytest.raises(ValueError, match="timeout"):
+        dut.result(timeout=timeout)
+    job.release.set()
+    assert dut.result(timeout=60.0) == "plan"
+
+
+def test_request_dropped_by_a_shut_down_pool_is_preempted(executor):
+    first, second = Job(), Job()
+    running = mut.submit(executor, first, 5.0)
+    assert first.started.wait(60.0)
+    dut = mut.submit(executor, second, 5.0)
+    executor.shutdown(wait=False, cancel_futures=True)
+    assert dut.done() and dut.status == mut.CANCELLED
+    with pytest.raises(PlanningError, match="dropped before it ran") as error:
+        dut.result(timeout=60.0)
+    assert error.value.code is ErrorCode.PREEMPTED
+    first.release.set()
+    assert running.result(timeout=60.0) == "plan" and not second.ran
+
+
+def test_plan_result_without_timeout_is_bounded(executor, monkeypatch):
+    monkeypatch.setattr(mut, "PLAN_GRACE", 0.0)
+    job = Job()
+    dut = mut.submit(executor, job, 0.01)  # waits its 0.01 s planning timeout, no more
+    with pytest.raises(TimeoutError, match="still running"):
+        dut.result()
+    job.release.set()
+    assert dut.result(timeout=60.0) == "plan"
+
+
+def test_cancel_reason_is_the_error_message(executor):
+    job = Job()
+    dut = mut.submit(executor, job, 5.0)
+    dut.cancel("the interface was closed")
+    dut.cancel("a second reason")  # the first one stays
+    job.release.set()
+    with pytest.raises(PlanningError, match="the interface was closed"):
+        dut.result()
+
+
 # ------------------------------------------------------ on a real interface, simulated time ----
-class PerfectTracking(LeafSystem):
-    """A stub station: the Panda's state is exactly the position command, at rest."""
-
-    def __init__(self):
-        super().__init__()
-        self.DeclareVectorInputPort("u", 9)
-        self.DeclareVectorOutputPort("x", 18, self.CalcState)
-
-    def CalcState(self, context, output):
-        output.SetFromVector(np.concatenate([self.get_input_port().Eval(context), np.zeros(9)]))
-
-
 @pytest.fixture(scope="module")
 def scene():
     return PlanningScene()
-
-
-def started_interface(scene):
-    from planning.interface import MotionPlanningInterface
-
-    station_builder = DiagramBuilder()
-    arm = station_builder.AddSystem(PerfectTracking())
-    station_builder.ExportInput(arm.get_input_port(), "panda.position_command")
-    station_builder.ExportOutput(arm.get_output_port(), "panda.state")
-    builder = DiagramBuilder()
-    station = builder.AddSystem(station_builder.Build())
-    interface = MotionPlanningInterface(scene)
-    interface.add_to_builder(builder, station)
-    interface.start(builder.Build())
-    return interface
 
 
 def close_gripper_polling(scene, poll):
@@ -284,12 +390,8 @@ def test_gripper_action_ends_at_the_same_simulated_time_however_often_polled(sce
         )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="advance(d) with d not a multiple of poll_period shifts the polling grid, so the "
-    "action is checked (and ends) at other simulated times (planning/interface.py)",
-)
 def test_gripper_action_end_does_not_depend_on_an_uneven_poll(scene):
     expected = close_gripper_polling(scene, None)
-    end = close_gripper_polling(scene, 0.037).end_time
-    assert end == pytest.approx(expected.end_time, abs=1e-9)
+    for poll in (0.037, 0.013, 0.1234, 0.005):  # not whole poll periods
+        end = close_gripper_polling(scene, poll).end_time
+        assert end == expected.end_time  # checked on the same grid: the very same time
