@@ -101,7 +101,15 @@ class Plan:
             raise ValueError("velocity and acceleration limits must be positive")
         if isinstance(self.timing, dict):
             self.timing = RetimeOptions(**self.timing)
-        self._timing = Timing(self.waypoints, self.max_velocity, self.max_acceleration, self.timing)
+        try:
+            self._timing = Timing(
+                self.waypoints, self.max_velocity, self.max_acceleration, self.timing
+            )
+        except (RuntimeError, SystemExit) as e:  # Drake's trajectory checks (SystemExit too)
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise ValueError(
+                f"the waypoints cannot be timed within these limits: {first}"
+            ) from None
 
     # ------------------------------------------------------------------------- inspect ----
     @property
