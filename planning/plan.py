@@ -50,6 +50,8 @@ from planning.model.panda import ARM_JOINTS
 from planning.scene_objects import describe_scene
 from planning.timing.retime import RetimeOptions, Timing
 
+_UNTIMEABLE = "the waypoints cannot be timed within the limits"
+
 
 @dataclass
 class Plan:
@@ -107,9 +109,7 @@ class Plan:
             )
         except (RuntimeError, SystemExit) as e:  # Drake's trajectory checks (SystemExit too)
             first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            raise ValueError(
-                f"the waypoints cannot be timed within these limits: {first}"
-            ) from None
+            raise ValueError(f"{_UNTIMEABLE}: {first}") from None
 
     # ------------------------------------------------------------------------- inspect ----
     @property
@@ -241,7 +241,8 @@ class Plan:
         # pydrake reports a failed internal condition (TOPP-RA on a degenerate path) as SystemExit.
         except (ValueError, RuntimeError, ArithmeticError, SystemExit) as e:
             first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            raise invalid(where, f"the waypoints cannot be timed within the limits: {first}") from e
+            message = first if first.startswith(_UNTIMEABLE) else f"{_UNTIMEABLE}: {first}"
+            raise invalid(where, message) from e
         if not (np.isfinite(plan.duration) and np.all(np.isfinite(plan._timing.times))):
             message = f"the timing of the waypoints is not finite (duration {plan.duration} s)"
             raise invalid(where, message)
