@@ -1,13 +1,12 @@
 """The planning scene: the Panda, world objects and objects held in the hand, with fast queries.
 
-The robot model is built once; objects are added to and removed from the model of Drake's
-``SceneGraphCollisionChecker`` at run time (``AddCollisionShapeToBody`` into every checker
-context, one geometry group per object; ``RemoveAllAddedCollisionShapes(group)``), which takes
-about a millisecond per add and a tenth of that per remove (see
-``benchmarks/planning_scene_benchmark.py``) and never rebuilds the plant. World objects hang on
-the world body; attached objects hang on ``panda_attachment``, a body welded to the hand, so they
-move with the hand, are checked against the world and the arm links, and not against the hand
-and fingers (filtered in the SceneGraph model, see ``panda_model``).
+The robot model is built once; objects are added to and removed from the model of a
+``BatchedCollisionChecker`` (Drake's ``SceneGraphCollisionChecker``, one geometry per object,
+registered in every checker context before the next query: adding costs about the same at 400
+objects as at 10, see ``benchmarks/scene_scale_benchmark.py``), never rebuilding the plant.
+World objects hang on the world body; attached objects hang on ``panda_attachment``, a body
+welded to the hand, so they move with the hand, are checked against the world and the arm links,
+and not against the hand and fingers (filtered in the SceneGraph model, see ``panda_model``).
 
 World objects are not checked against ``panda_link0``: it is welded to the world, and Drake
 filters collisions within a welded group.
@@ -15,21 +14,18 @@ filters collisions within a welded group.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 
 import numpy as np
 from pydrake.geometry import GeometryId
 from pydrake.math import RigidTransform
-from pydrake.planning import SceneGraphCollisionChecker
 
+from planning.collision.batched_checker import BatchedCollisionChecker
 from planning.config import PandaPlanningConfig
 from planning.errors import ErrorCode, PlanningError
-from planning.model.panda import (
-    ATTACHMENT_BODY,
-    PandaModel,
-    build_panda_model,
-    disabled_collision_pairs,
-)
+from planning.io import scene_files
+from planning.model import panda
 from planning.scene_objects import SceneObject
 
 _WORLD_PREFIX = "world/"
@@ -50,9 +46,9 @@ class PlanningScene:
 
     def __init__(self, config: PandaPlanningConfig | None = None, *, meshcat=None):
         self._config = config if config is not None else PandaPlanningConfig()
-        model = build_panda_model(self._config.model, meshcat=meshcat)
+        model = panda.build_panda_model(self._config.model, meshcat=meshcat)
         options = self._config.model
-        self._checker = SceneGraphCollisionChecker(
+        self._checker = BatchedCollisionChecker(
             model=model.diagram,
             robot_model_instances=[model.instance],
             edge_step_size=options.edge_step_size,
@@ -60,21 +56,24 @@ class PlanningScene:
             self_collision_padding=options.self_collision_padding,
         )
         self._model = dataclasses.replace(model, diagram=self._checker.model())
+        self._plant = self._checker.plant()
         self._meshcat = meshcat
         self._world: dict[str, SceneObject] = {}
         self._attached: dict[str, SceneObject] = {}
         self._finger_positions = np.full(2, options.finger_position)
         # A context of our own to name colliding geometries and evaluate poses.
         self._context = self._checker.MakeStandaloneModelContext()
-        self._geometry_names: dict[GeometryId, str] = {}
+        self._geometry_names: dict[GeometryId, str] = {}  # object names of added geometries
+        self._geometry_ids: dict[str, GeometryId] = {}  # by group, "world/name" or "attached/name"
         self.version = 0  # bumped by every change of objects, fingers or allowed pairs
         # Sphere models of the robot in this scene, by cover slack (m); built on first use by
         # planning.collision.sphere_checker.sphere_model and owned by the scene.
         self.sphere_models: dict[float, object] = {}
         # The checker filters body pairs: declare the SRDF's pairs there too, so that shapes
         # added later (held objects on the attachment body) are filtered as well.
-        for link_a, link_b in disabled_collision_pairs(options):
+        for link_a, link_b in panda.disabled_collision_pairs(options):
             self.allow_collision(link_a, link_b)
+        self._robot_filters = self._checker.GetFilteredCollisionMatrix().copy()  # the robot's own
         # Held objects may touch world objects (they rest on the table when grasped and when
         # placed): a negative padding between the attachment body and the world.
         self._checker.SetPaddingBetween(
@@ -93,17 +92,20 @@ class PlanningScene:
         return self._config
 
     @property
-    def model(self) -> PandaModel:
+    def model(self) -> panda.PandaModel:
         """The robot model (its ``diagram`` is owned by the collision checker)."""
         return self._model
 
     @property
     def plant(self):
-        return self._checker.plant()
+        return self._plant
 
     @property
-    def checker(self) -> SceneGraphCollisionChecker:
-        """The collision checker holding the scene's geometry (for planners)."""
+    def checker(self) -> BatchedCollisionChecker:
+        """The scene's Drake ``SceneGraphCollisionChecker``, every object registered (queued ones
+        now, later ones before any use from Python: C++ code holding it sees later changes
+        once the scene or the checker is next used from Python)."""
+        self._checker.flush()
         return self._checker
 
     @property
@@ -169,10 +171,7 @@ class PlanningScene:
         Raises:
             PlanningError: INVALID_OBJECT_NAME when the name is taken.
         """
-        if self.has_object(obj.name):
-            raise PlanningError(
-                ErrorCode.INVALID_OBJECT_NAME, f"the scene already has an object {obj.name!r}"
-            )
+        self._check_new(obj.name)
         self._add_geometry(_WORLD_PREFIX + obj.name, self.plant.world_body(), obj)
         self._world[obj.name] = obj
 
@@ -232,10 +231,7 @@ class PlanningScene:
 
     def attach_new(self, obj: SceneObject) -> None:
         """Attaches a new object given in the attachment frame A (``obj.X_PO`` is ``X_AO``)."""
-        if self.has_object(obj.name):
-            raise PlanningError(
-                ErrorCode.INVALID_OBJECT_NAME, f"the scene already has an object {obj.name!r}"
-            )
+        self._check_new(obj.name)
         self._add_geometry(_ATTACHED_PREFIX + obj.name, self._attachment_body(), obj)
         self._attached[obj.name] = obj
 
@@ -260,8 +256,7 @@ class PlanningScene:
 
     def attachment_pose(self, q) -> RigidTransform:
         """Returns X_WA, the pose of the attachment frame (the hand frame) at q."""
-        plant = self.plant
-        return plant.EvalBodyPoseInWorld(self.plant_context(q), self._attachment_body())
+        return self._plant.EvalBodyPoseInWorld(self.plant_context(q), self._attachment_body())
 
     # --------------------------------------------------------------------------- queries ----
     def is_collision_free(self, q) -> bool:
@@ -316,34 +311,48 @@ class PlanningScene:
         Raises:
             PlanningError: INVALID_OBJECT_NAME for an unknown link.
         """
-        bodies = []
-        for name in (link_a, link_b):
-            if not self.plant.HasBodyNamed(name, self._model.instance):
-                raise PlanningError(
-                    ErrorCode.INVALID_OBJECT_NAME, f"the Panda has no link {name!r}"
-                )
-            bodies.append(self.plant.GetBodyByName(name, self._model.instance).index())
-        if bodies[0] != bodies[1]:
-            self._checker.SetCollisionFilteredBetween(bodies[0], bodies[1], True)
+        a, b = self._link_index(link_a), self._link_index(link_b)
+        if a != b:
+            self._checker.SetCollisionFilteredBetween(a, b, True)
             self.version += 1
 
-    def load_yaml(self, filename) -> None:
-        """Replaces the world objects by those of our scene YAML (``scene_io``)."""
-        from planning.io.scene_files import load_scene_yaml
+    def replace(self, world=(), attached=(), allowed=()) -> None:
+        """Replaces the whole scene: the world objects (the table too) by ``world``, the held
+        ones by ``attached`` (poses in the attachment frame A), the allowed collisions by the
+        robot's own plus the ``allowed`` pairs of link names; clears ``place_position``.
 
-        load_scene_yaml(self, filename)
+        Raises:
+            PlanningError: INVALID_OBJECT_NAME (a name used twice, an unknown link): no change.
+        """
+        names = collections.Counter(o.name for o in [*world, *attached])
+        if duplicates := sorted(n for n, k in names.items() if k > 1):
+            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, f"duplicate names {duplicates}")
+        filters = self._robot_filters.copy()
+        for link_a, link_b in allowed:
+            a, b = self._link_index(link_a), self._link_index(link_b)
+            filters[a, b] = filters[b, a] = a != b
+        for name in [*self._world, *self._attached]:
+            self.remove_object(name)
+        self._checker.SetCollisionFilterMatrix(filters)
+        for obj in world:
+            self.add_object(obj)
+        for obj in attached:
+            self.attach_new(obj)
+        self.place_position = None
+        self.version += 1
+
+    def load_yaml(self, filename) -> None:
+        """Replaces the whole scene by our scene YAML (``planning.io.scene_files``)."""
+        scene_files.load_scene_yaml(self, filename)
 
     def load_moveit(self, filename) -> None:
-        """Replaces the world objects by those of a MoveIt PlanningScene YAML (``scene_io``)."""
-        from planning.io.scene_files import load_moveit_scene
-
-        load_moveit_scene(self, filename)
+        """Replaces the whole scene by a MoveIt scene: a PlanningScene YAML (``.yaml``, ``.yml``)
+        or the text format (``.scene``); see ``planning.io.moveit_scene``."""
+        scene_files.load_moveit_scene(self, filename)
 
     def save_yaml(self, filename) -> None:
-        """Writes the scene in our YAML (``scene_io``)."""
-        from planning.io.scene_files import save_scene_yaml
-
-        save_scene_yaml(self, filename)
+        """Writes the scene in our YAML (``planning.io.scene_files``)."""
+        scene_files.save_scene_yaml(self, filename)
 
     def publish(self, q) -> None:
         """Shows the robot at q and every object in Meshcat (when the scene has one)."""
@@ -353,32 +362,36 @@ class PlanningScene:
 
     # --------------------------------------------------------------------------- private ----
     def _attachment_body(self):
-        return self.plant.GetBodyByName(ATTACHMENT_BODY, self._model.instance)
+        return self.plant.GetBodyByName(panda.ATTACHMENT_BODY, self._model.instance)
 
     def _add_geometry(self, group: str, body, obj: SceneObject) -> None:
         self.version += 1
-        inspector = self._context.GetQueryObject().inspector()
-        before = set(inspector.GetAllGeometryIds())
-        if not self._checker.AddCollisionShapeToBody(group, body, obj.drake_shape(), obj.X_PO):
-            raise PlanningError(ErrorCode.INVALID_SCENE, f"could not add object {obj.name!r}")
-        inspector = self._context.GetQueryObject().inspector()
-        for geometry_id in set(inspector.GetAllGeometryIds()) - before:
-            self._geometry_names[geometry_id] = obj.name
+        geometry_id = self._checker.queue_shape(body.index(), obj.drake_shape(), obj.X_PO, group)
+        self._geometry_ids[group] = geometry_id
+        self._geometry_names[geometry_id] = obj.name
 
     def _remove_geometry(self, group: str) -> None:
         self.version += 1
-        name = group.split("/", 1)[1]
-        self._checker.RemoveAllAddedCollisionShapes(group)
-        self._geometry_names = {k: v for k, v in self._geometry_names.items() if v != name}
+        geometry_id = self._geometry_ids.pop(group)
+        self._checker.queue_removal(geometry_id)
+        del self._geometry_names[geometry_id]
+
+    def _check_new(self, name: str) -> None:
+        if self.has_object(name):
+            raise PlanningError(
+                ErrorCode.INVALID_OBJECT_NAME, f"the scene already has an object {name!r}"
+            )
+
+    def _link_index(self, name: str):
+        if not self._plant.HasBodyNamed(name, self._model.instance):
+            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, f"the Panda has no link {name!r}")
+        return self._plant.GetBodyByName(name, self._model.instance).index()
 
     def _describe(self, query_object, geometry_id):
-        inspector = query_object.inspector()
-        body = self.plant.GetBodyFromFrameId(inspector.GetFrameId(geometry_id))
-        name = self._geometry_names.get(geometry_id, body.name())
-        return name, body.index()
+        body = self._plant.GetBodyFromFrameId(query_object.inspector().GetFrameId(geometry_id))
+        return self._geometry_names.get(geometry_id, body.name()), body.index()
 
     def _unknown(self, name: str, kind: str = "") -> str:
-        known = sorted(self._world) if kind != "attached " else sorted(self._attached)
-        if not kind:
-            known = sorted([*self._world, *self._attached])
-        return f"no {kind}object named {name!r}; the scene has {known}"
+        known = {"": [*self._world, *self._attached], "world ": self._world}
+        known = known.get(kind, self._attached)
+        return f"no {kind}object named {name!r}; the scene has {sorted(known)}"

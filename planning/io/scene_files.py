@@ -11,16 +11,15 @@ Our format (``config/pickplace.yaml``; world frame, metres, box centres)::
          orientation: [x, y, z, w]}
     attached: # held objects, pose in the hand's attachment frame A (same keys as objects)
 
-MoveIt's ``moveit_msgs/PlanningScene`` YAML (e.g. the MotionBenchMaker files): each of
-``world.collision_objects`` has an ``id``, ``primitives`` (box ``dimensions: [x, y, z]``,
-cylinder ``[height, radius]``, sphere ``[radius]``) and ``primitive_poses`` (position and an
-``[x, y, z, w]`` quaternion, composed with the object's ``pose`` when it has one). An object with
-several primitives becomes objects ``id``, ``id#1``, ``id#2``, ... ``allowed_collision_matrix``
-entries that allow two robot links to touch become collision filters.
+Loading replaces the whole scene: world objects (the table too), held objects, allowed
+collisions (back to the robot's own) and the place target.
+
+MoveIt's scene files (PlanningScene YAML and the text ``.scene`` format) are read by
+``planning.io.moveit_scene``; ``load_moveit_scene``, ``parse_moveit_objects`` and
+``parse_allowed_collisions`` are importable from here too.
 """
 
 import dataclasses as dc
-import logging
 import math
 from pathlib import Path
 
@@ -29,12 +28,25 @@ import yaml
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
+from planning.io.moveit_scene import (
+    load_moveit_scene,
+    parse_allowed_collisions,
+    parse_moveit_objects,
+)
 from planning.scene_objects import SceneObject, make_pose
 
-_log = logging.getLogger(__name__)
-# libyaml's parser when PyYAML has it: the MBM scene files parse about 10 times faster.
-_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-_MOVEIT_TYPES = {1: "box", 2: "sphere", 3: "cylinder", 4: "cone"}
+__all__ = [
+    "BoxSpec",
+    "ObjectSpec",
+    "PlaceSpec",
+    "SceneFile",
+    "apply_scene_file",
+    "load_moveit_scene",
+    "load_scene_yaml",
+    "parse_allowed_collisions",
+    "parse_moveit_objects",
+    "save_scene_yaml",
+]
 
 
 @dc.dataclass
@@ -73,7 +85,7 @@ class SceneFile:
 
 
 def load_scene_yaml(scene, filename: Path | str) -> None:
-    """Replaces the world objects of ``scene`` (the table too) by those of our scene YAML.
+    """Replaces the whole of ``scene`` by our scene YAML (see the module's docstring).
 
     Raises:
         PlanningError: INVALID_SCENE for a malformed file or bad values, naming the file.
@@ -86,8 +98,7 @@ def load_scene_yaml(scene, filename: Path | str) -> None:
 
 
 def apply_scene_file(scene, spec: SceneFile, *, where: str = "scene") -> None:
-    """Replaces the world objects of ``scene`` (the table too) by those of a parsed
-    ``SceneFile`` and sets ``scene.place_position``.
+    """Replaces the whole of ``scene`` by a parsed ``SceneFile`` (``place_position`` included).
 
     Raises:
         PlanningError: INVALID_SCENE for bad values, naming ``where`` and the object.
@@ -107,7 +118,10 @@ def apply_scene_file(scene, spec: SceneFile, *, where: str = "scene") -> None:
         place = None if spec.place is None else make_pose(spec.place.position, name="place")
     except ValueError as e:
         raise PlanningError(ErrorCode.INVALID_SCENE, f"{where}: {e}") from e
-    _replace(scene, objects, attached, where)
+    try:
+        scene.replace(objects, attached)
+    except PlanningError as e:
+        raise PlanningError(ErrorCode.INVALID_SCENE, f"{where}: {e.message}") from None
     scene.place_position = None if place is None else place.translation()
 
 
@@ -133,100 +147,6 @@ def save_scene_yaml(scene, filename: Path | str) -> None:
     if scene.attached_objects:
         data["attached"] = [_object_entry(o) for o in scene.attached_objects.values()]
     Path(filename).write_text(yaml.safe_dump(data, sort_keys=False, default_flow_style=None))
-
-
-def load_moveit_scene(scene, filename: Path | str) -> None:
-    """Replaces the world objects of ``scene`` (the table too) by a MoveIt PlanningScene's.
-
-    Raises:
-        PlanningError: INVALID_SCENE for a malformed file, an unsupported shape (meshes, cones)
-            or bad values; the message names the file and the object.
-    """
-    filename = Path(filename)
-    try:
-        data = yaml.load(filename.read_text(), Loader=_SafeLoader)
-    except (OSError, yaml.YAMLError) as e:
-        raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
-    try:
-        objects = parse_moveit_objects(data)
-        allowed = parse_allowed_collisions(data)
-    except (ValueError, KeyError, TypeError) as e:
-        raise PlanningError(ErrorCode.INVALID_SCENE, f"{filename}: {e}") from e
-    _replace(scene, objects, [], str(filename))
-    scene.place_position = None
-    for link_a, link_b in allowed:
-        if scene.model.plant.HasBodyNamed(link_a) and scene.model.plant.HasBodyNamed(link_b):
-            scene.allow_collision(link_a, link_b)
-        else:
-            _log.warning("%s: allowed collision %s <-> %s not applied", filename, link_a, link_b)
-
-
-def parse_moveit_objects(data) -> list[SceneObject]:
-    """Returns the world objects of a parsed ``moveit_msgs/PlanningScene`` mapping."""
-    if not isinstance(data, dict):
-        raise ValueError("a PlanningScene must be a mapping")
-    world = data.get("world") or {}
-    result = []
-    for entry in world.get("collision_objects") or []:
-        name = entry.get("id")
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"collision object without an id: {entry}")
-        if entry.get("meshes") or entry.get("planes"):
-            raise ValueError(f"object {name!r}: meshes and planes are not supported")
-        primitives = entry.get("primitives") or []
-        poses = entry.get("primitive_poses") or []
-        if len(primitives) != len(poses):
-            raise ValueError(f"object {name!r}: {len(primitives)} primitives, {len(poses)} poses")
-        X_WP = _moveit_pose(entry["pose"], name) if "pose" in entry else None
-        for k, (primitive, pose) in enumerate(zip(primitives, poses, strict=True)):
-            X_PO = _moveit_pose(pose, name)
-            X_WO = X_PO if X_WP is None else X_WP @ X_PO
-            shape, size = _moveit_shape(primitive, name)
-            result.append(SceneObject(name if k == 0 else f"{name}#{k}", shape, size, X_WO))
-    return result
-
-
-def parse_allowed_collisions(data) -> list[tuple[str, str]]:
-    """Returns the name pairs an ``allowed_collision_matrix`` allows to collide."""
-    acm = data.get("allowed_collision_matrix") or {}
-    names = acm.get("entry_names") or []
-    values = acm.get("entry_values") or []
-    if len(values) != len(names):
-        raise ValueError(f"allowed_collision_matrix: {len(names)} names, {len(values)} rows")
-    pairs = []
-    for i, row in enumerate(values):
-        row = row.get("enabled", []) if isinstance(row, dict) else row
-        if len(row) != len(names):
-            raise ValueError(f"allowed_collision_matrix row {i} has {len(row)} values")
-        pairs += [(names[i], names[j]) for j in range(i + 1, len(names)) if row[j]]
-    return pairs
-
-
-def _moveit_pose(pose, name):
-    if not isinstance(pose, dict) or "position" not in pose:
-        raise ValueError(f"object {name!r}: pose needs a position, got {pose!r}")
-    position = pose["position"]
-    if isinstance(position, dict):
-        position = [position.get(k) for k in "xyz"]
-    orientation = pose.get("orientation", [0, 0, 0, 1])
-    if isinstance(orientation, dict):
-        orientation = [orientation.get(k) for k in "xyzw"]
-    return make_pose(position, orientation, name=f"object {name!r}")
-
-
-def _moveit_shape(primitive, name) -> tuple[str, tuple[float, ...]]:
-    kind = primitive.get("type")
-    kind = _MOVEIT_TYPES.get(kind, kind) if isinstance(kind, int) else str(kind).lower()
-    dims = list(primitive.get("dimensions") or [])
-    if kind == "box":
-        return "box", tuple(dims)
-    if kind == "sphere":
-        return "sphere", tuple(dims)
-    if kind == "cylinder":
-        if len(dims) != 2:
-            raise ValueError(f"object {name!r}: a cylinder needs [height, radius], got {dims}")
-        return "cylinder", (dims[1], dims[0])
-    raise ValueError(f"object {name!r}: unsupported primitive type {kind!r}")
 
 
 def _box_object(name: str, box: BoxSpec) -> SceneObject:
@@ -259,21 +179,3 @@ def _yaw_only(obj: SceneObject) -> float | None:
     if abs(R[2, 2] - 1.0) > 1e-9:
         return None
     return float(math.atan2(R[1, 0], R[0, 0]))
-
-
-def _replace(scene, objects: list[SceneObject], attached: list[SceneObject], where: str) -> None:
-    """Checks names, then replaces the scene's world objects (and held ones when given)."""
-    names = [o.name for o in objects + attached]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
-    if duplicates:
-        raise PlanningError(
-            ErrorCode.INVALID_SCENE, f"{where}: duplicate object names {duplicates}"
-        )
-    scene.clear()
-    if attached:
-        for name in list(scene.attached_objects):
-            scene.remove_object(name)
-    for obj in objects:
-        scene.add_object(obj)
-    for obj in attached:
-        scene.attach_new(obj)

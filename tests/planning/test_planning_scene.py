@@ -1,4 +1,5 @@
-"""PlanningScene: run-time objects, attaching, queries, Meshcat display."""
+"""PlanningScene: run-time objects, attaching, queries, replacing the whole scene, objects
+queued for the checker until the next query, Meshcat display."""
 
 import numpy as np
 import pytest
@@ -18,11 +19,10 @@ def base_scene():
 def dut(base_scene):
     """The shared scene, restored to the table alone after each test."""
     yield base_scene
-    for name in list(base_scene.attached_objects):
-        base_scene.remove_object(name)
-    base_scene.clear()
     table = base_scene.config.table
-    base_scene.add_box("table", table.size, RigidTransform(table.position))
+    base_scene.replace(
+        [mut.SceneObject("table", "box", table.size, RigidTransform(table.position))]
+    )
     base_scene.finger_positions = base_scene.config.model.finger_position
 
 
@@ -172,3 +172,58 @@ def test_held_object_may_rest_on_the_table_but_not_sink_into_it(dut, ready):
         assert dut.is_collision_free(ready) == free, sink
         assert (("held", "table") in dut.colliding_pairs(ready)) == (not free)
         dut.remove_object("held")
+
+
+# A configuration where only panda_link2 and panda_link5 collide.
+SELF_COLLIDING = [2.561, -1.368, 1.56, -3.011, -1.528, 3.264, -0.869]
+
+
+def test_replace_swaps_the_whole_scene(dut, ready):
+    dut.attach_new(mut.SceneObject("old held", "sphere", (0.02,), RigidTransform([0, 0, 0.1])))
+    dut.allow_collision("panda_link2", "panda_link5")
+    dut.place_position = np.zeros(3)
+    assert dut.is_collision_free(SELF_COLLIDING)
+    block = mut.SceneObject("block", "box", (0.1, 0.1, 0.1), RigidTransform([0.31, 0.0, 0.5]))
+    held = mut.SceneObject("held", "box", (0.02, 0.02, 0.02), RigidTransform([0, 0, 0.1]))
+    version = dut.version
+    dut.replace([block], [held], [("panda_link1", "panda_link7")])
+    assert list(dut.world_objects) == ["block"] and list(dut.attached_objects) == ["held"]
+    assert dut.place_position is None and dut.version > version
+    assert ("block", "panda_hand") in dut.colliding_pairs(ready)
+    assert dut.colliding_pairs(SELF_COLLIDING) == [("panda_link2", "panda_link5")]  # not allowed
+    body = dut.plant.GetBodyByName
+    assert dut.checker.IsCollisionFilteredBetween(body("panda_link1"), body("panda_link7"))
+    assert dut.checker.IsCollisionFilteredBetween(body("panda_hand"), body("panda_link7"))  # SRDF
+    for bad in (
+        {"world": [block, block]},
+        {"world": [block], "attached": [block.with_pose(RigidTransform())]},
+        {"allowed": [("panda_link1", "panda_tail")]},
+    ):
+        with pytest.raises(PlanningError) as info:
+            dut.replace(**bad)
+        assert info.value.code == ErrorCode.INVALID_OBJECT_NAME
+        assert list(dut.world_objects) == ["block"] and list(dut.attached_objects) == ["held"]
+
+
+def test_objects_wait_for_the_next_query_and_every_query_sees_them(dut, ready):
+    """Adds are queued in the checker until it is next used, even through a reference a
+    planner kept from before the add."""
+    from planning.collision.checker import CheckerAdapter
+
+    adapter, checker = CheckerAdapter(dut), dut.checker
+    assert adapter.config_free(ready)
+    for i in range(50):  # far away from the robot
+        dut.add_sphere(f"s{i}", 0.01, RigidTransform([3.0 + 0.05 * i, 0.0, 0.0]))
+    dut.add_box("block", [0.1, 0.1, 0.1], RigidTransform([0.31, 0.0, 0.5]))
+    assert checker.pending == 51  # queued
+    assert not adapter.config_free(ready)  # the adapter's checker applies the queue first
+    assert checker.pending == 0
+    dut.add_box("post", [0.1, 0.1, 0.1], RigidTransform([0.31, 0.0, 0.5]))
+    assert checker.pending == 1 and dut.checker.pending == 0  # reading ``checker`` applies it
+    dut.remove_object("post")
+    assert ("block", "panda_hand") in dut.colliding_pairs(ready)
+    dut.remove_object("block")
+    assert adapter.config_free(ready) and dut.is_collision_free(ready)
+    assert len(dut.world_objects) == 51
+    dut.clear()
+    assert dut.world_objects == {} and dut.is_collision_free(ready)

@@ -1,0 +1,187 @@
+"""MoveIt's text ``.scene`` format: hand-written files of the old layout (shape poses in the
+world) and the new one (an object pose, shape poses in it, subframes), loading through
+``PlanningScene.load_moveit``, and errors naming the file, the line and what was expected.
+Property tests: generated scenes in either layout read back; any corruption is a ValueError."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import event, given, settings
+from hypothesis import strategies as st
+from pydrake.math import RigidTransform, RollPitchYaw
+
+import planning.io.moveit_text as mut
+from planning import ErrorCode, PlanningError, SceneObject, make_pose
+from tests.planning.io.conftest import assert_same_objects
+from tests.planning.io.scene_strategies import positions, quaternions
+
+DATA = Path(__file__).parent / "data"
+
+
+def read(name: str) -> dict:
+    path = DATA / name
+    return {o.name: o for o in mut.parse_scene_text(path.read_text(), str(path))}
+
+
+def test_old_layout():
+    objects = read("old_layout.scene")
+    upright = RigidTransform()
+    assert_same_objects(
+        objects,
+        {
+            "table top": SceneObject(
+                "table top", "box", (1.2, 0.8, 0.04), RigidTransform([0.5, 0, -0.02])
+            ),
+            "bottle": SceneObject(
+                "bottle", "cylinder", (0.03, 0.2), upright @ RigidTransform([0.4, 0.2, 0.1])
+            ),
+            "bottle#1": SceneObject(
+                "bottle#1", "sphere", (0.03,), RigidTransform([0.4, 0.2, 0.23])
+            ),
+        },
+    )
+
+
+def test_new_layout_shapes_sit_in_their_objects_frame():
+    objects = read("new_layout.scene")
+    R = RollPitchYaw(0, 0, np.pi / 2)
+    assert_same_objects(
+        objects,
+        {
+            "shelf": SceneObject(
+                "shelf", "box", (0.3, 0.02, 0.4), RigidTransform(R, [0.5, -0.3, 0.5])
+            ),
+            "shelf#1": SceneObject(
+                "shelf#1", "box", (0.3, 0.02, 0.4), RigidTransform(R, [0.7, -0.3, 0.5])
+            ),
+            "ball": SceneObject("ball", "sphere", (0.05,), RigidTransform([0.2, 0.4, 0.05])),
+        },
+    )
+
+
+def test_planning_scene_loads_scene_files(table_scene):
+    table_scene.load_moveit(DATA / "new_layout.scene")
+    assert sorted(table_scene.world_objects) == ["ball", "shelf", "shelf#1"]  # table replaced
+
+
+def test_an_object_named_again_replaces_the_first():
+    text = "s\n* a\n1\nsphere 0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n"
+    text += "* a\n1\nbox 1 1 1\n1 1 1\n0 0 0 1\n0 0 0 0\n."
+    (only,) = mut.parse_scene_text(text)
+    assert only.name == "a" and only.shape == "box"
+    assert mut.parse_scene_text("empty scene\n.\n") == []
+    assert mut.parse_scene_text("s\n* none\n0\n.") == []  # no shapes: nothing
+
+
+SPHERE = "sphere\n0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n"
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("", "empty file"),
+        ("s\n", "end of the file (no '.' at the end?)"),
+        ("s\n* a\n1\n" + SPHERE, ":8: expected '*' (an object) or '.'"),
+        ("s\nbox\n.", ":2: expected '*' (an object) or '.' (the end), got 'box'"),
+        ("s\n*\n1\n" + SPHERE + ".", ":2: an object needs a name"),
+        (
+            "s\n* a\none\n" + SPHERE + ".",
+            ":3: object 'a': the number of shapes: expected a whole number",
+        ),
+        ("s\n* a\n-1\n" + SPHERE + ".", "expected a whole number, got '-1'"),
+        ("s\n* a\n1\nmesh\n3 1\n.", ":4: object 'a', shape 1: mesh shapes are not supported"),
+        ("s\n* a\n1\ncone 1 1\n.", "cone shapes are not supported"),
+        ("s\n* a\n1\nplane 0 0 1 0\n.", "plane shapes are not supported"),
+        ("s\n* a\n1\nblob 1\n.", "unknown shape 'blob'"),
+        (
+            "s\n* a\n1\nbox 1 x 1\n.",
+            ":4: object 'a', shape 1: box x y z: expected a number, got 'x'",
+        ),
+        ("s\n* a\n1\nbox 1 0 1\n.", "box sizes must be positive"),
+        ("s\n* a\n1\nsphere nan\n.", "'nan' is not finite"),
+        ("s\n* a\n1\nsphere 1\n0 0\n0 0 0 1\n", "shape 1: orientation qx qy qz qw, got the end"),
+        (
+            "s\n* a\n1\nsphere 1\n0 0 0\n0 0 0 0\n0 0 0 0\n.",
+            ":6: object 'a', shape 1 orientation is a zero",
+        ),
+        (
+            "s\n* a\n1\nsphere 1\n0 0 0\n0 0 0 1\n0 0 0\n.",
+            "colour r g b a: expected a number, got '.'",
+        ),
+        (
+            "s\n* a\n0 0 0\n0 0 0 1\n1\n" + SPHERE + "x\n.",
+            "the number of subframes: expected a whole number",
+        ),
+    ],
+)
+def test_errors_name_the_line_and_what_was_expected(text, needle):
+    with pytest.raises(ValueError) as info:
+        mut.parse_scene_text(text, "my.scene")
+    assert str(info.value).startswith("my.scene") and needle in str(info.value)
+
+
+def test_a_bad_file_is_an_invalid_scene(table_scene, write):
+    path = write("s\n* a\n1\nmesh\n3 1\n.", "bad.scene")
+    with pytest.raises(PlanningError) as info:
+        table_scene.load_moveit(path)
+    assert info.value.code == ErrorCode.INVALID_SCENE
+    assert f"{path}:4" in info.value.message and "mesh" in info.value.message
+    assert list(table_scene.world_objects) == ["table"]
+
+
+# ------------------------------------------------------------------------ property tests ----
+def words(values) -> str:
+    return " ".join(repr(float(v)) for v in values)
+
+
+@st.composite
+def text_scenes(draw) -> tuple[str, dict]:
+    """A ``.scene`` text of either layout and the objects it describes."""
+    newer = draw(st.booleans())
+    lines, expected = ["generated"], {}
+    for i in draw(st.lists(st.integers(0, 9), unique=True, max_size=4)):
+        X_WO = make_pose(draw(positions), draw(quaternions)) if newer else RigidTransform()
+        lines.append(f"* thing {i}")
+        if newer:
+            q = X_WO.rotation().ToQuaternion()
+            lines += [words(X_WO.translation()), words([q.x(), q.y(), q.z(), q.w()])]
+        count = draw(st.integers(1, 2))
+        lines.append(str(count))
+        for k in range(count):
+            shape = draw(st.sampled_from(["box", "sphere", "cylinder"]))
+            n = {"box": 3, "sphere": 1, "cylinder": 2}[shape]
+            size = draw(st.lists(st.floats(0.01, 1.0), min_size=n, max_size=n))
+            position, quaternion = draw(positions), draw(quaternions)
+            lines += [shape, words(size), words(position), words(quaternion), "0.5 0.5 0.5 1"]
+            name = f"thing {i}" if k == 0 else f"thing {i}#{k}"
+            X = X_WO @ make_pose(position, quaternion)
+            expected[name] = SceneObject(name, shape, tuple(size), X)
+        if newer:
+            lines += ["1", "grip", "0 0 0.1", "0 0 0 1"]
+    return "\n".join([*lines, "."]) + "\n", expected
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(scene=text_scenes())
+def test_generated_scenes_read_back(scene):
+    text, expected = scene
+    assert_same_objects({o.name: o for o in mut.parse_scene_text(text)}, expected)
+
+
+@settings(max_examples=200, derandomize=True, deadline=None)
+@given(scene=text_scenes(), data=st.data())
+def test_corruptions_are_a_value_error(scene, data):
+    """Any word replaced, dropped or doubled: a ValueError naming the file, or a scene."""
+    tokens = scene[0].split(" ")
+    at = data.draw(st.integers(0, len(tokens) - 1))
+    junk = data.draw(st.sampled_from(["x", "-1", "nan", "*", ".", "mesh", "cone", "1e309", ""]))
+    edits = [tokens[:at] + [junk] + tokens[at + 1 :], tokens[:at] + tokens[at + 1 :]]
+    edits.append(tokens[: at + 1] + tokens[at:])
+    text = " ".join(data.draw(st.sampled_from(edits)))
+    try:
+        mut.parse_scene_text(text, "gen.scene")
+        event("read")
+    except ValueError as e:
+        assert str(e).startswith("gen.scene")
+        event("ValueError")
