@@ -1,0 +1,283 @@
+"""Wall-E on a flat floor: the plant, its IMU, pitch estimator, encoders, a driver, pushes.
+
+``add_walle_controls`` wires the sensors and controllers to a robot already in a plant (for a
+diagram that brings its own floor, a course, a camera); ``make_walle_diagram`` builds the
+whole thing on a flat floor; ``run_walle`` simulates it headless and measures what it did.
+"""
+
+import dataclasses as dc
+import math
+import time
+
+import numpy as np
+from pydrake.common import RandomGenerator
+from pydrake.common.value import AbstractValue
+from pydrake.geometry import Meshcat
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.math import SpatialForce
+from pydrake.multibody.plant import (
+    AddMultibodyPlant,
+    ExternallyAppliedSpatialForce,
+    MultibodyPlant,
+)
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, MatrixGain
+from pydrake.visualization import ApplyVisualizationConfig
+
+from diagrams.ddrive_world import add_ground
+from diagrams.walle_balance_scenario import Push, WalleBalanceScenario, WalleStart
+from drake_sim.robots.walle import BODY_LINK, WHEEL_JOINTS, add_walle
+from drake_sim.robots.walle_params import WalleParams
+from drake_sim.systems.axle import axle_yaw_and_pitch
+from drake_sim.systems.control.balance_controller import BalanceController
+from drake_sim.systems.control.diff_drive_controller import DiffDriveController
+from drake_sim.systems.estimation.pitch_estimator import PitchEstimator
+from drake_sim.systems.sensors.imu import add_imu, rotation_from_quaternion
+
+ROBOT_NAME = "walle"
+"""The robot's model instance name."""
+LOGGED = ("state", "pitch_estimate", "wheel_torques")
+"""Signals logged every ``scenario.log_period``: the diagram has a ``log_<name>`` sink each
+(``state`` is the robot's plant state: the ground truth)."""
+
+
+class PushSchedule(LeafSystem):
+    """Pushes a body at a point with constant forces over given time windows.
+
+    .. pydrake_system::
+
+        name: PushSchedule
+        output_ports:
+        - spatial_forces
+
+    ``spatial_forces`` (a list of ``ExternallyAppliedSpatialForce``, for the plant's
+    ``applied_spatial_force`` input) holds the sum of the pushes active at the current time
+    (``push.time <= t < push.time + push.duration``), applied at ``p_BoBq_B`` on the body.
+    """
+
+    def __init__(self, *, body_index, p_BoBq_B: np.ndarray, pushes: list[Push]):
+        super().__init__()
+        self._body_index = body_index
+        self._p_BoBq_B = np.asarray(p_BoBq_B, dtype=float)
+        self._pushes = [(p.time, p.time + p.duration, np.asarray(p.force, float)) for p in pushes]
+        self.DeclareAbstractOutputPort(
+            "spatial_forces",
+            lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
+            self._calc,
+            {self.time_ticket()},
+        )
+
+    def force_at(self, t: float) -> np.ndarray:
+        """The total force (N, world frame) at time ``t`` (s)."""
+        total = np.zeros(3)
+        for start, end, force in self._pushes:
+            if start <= t < end:
+                total += force
+        return total
+
+    def _calc(self, context, output):
+        push = ExternallyAppliedSpatialForce()
+        push.body_index = self._body_index
+        push.p_BoBq_B = self._p_BoBq_B
+        push.F_Bq_W = SpatialForce(np.zeros(3), self.force_at(context.get_time()))
+        output.set_value([push])
+
+
+def walle_start_pose(start: WalleStart, robot: WalleParams) -> RigidTransform:
+    """X_WB of the robot with its wheels on the floor at ``start`` (leaning ``start.pitch``
+    about its axle). The axle is lifted 1 mm so the first step does not start in contact."""
+    R_WB = RollPitchYaw(0.0, math.radians(start.pitch), math.radians(start.yaw)).ToRotationMatrix()
+    p_WA = np.array([start.x, start.y, robot.wheel.radius])  # The axle's midpoint.
+    return RigidTransform(R_WB, p_WA - R_WB @ np.array([0.0, 0.0, robot.axle_z]))
+
+
+def wheel_encoders(plant: MultibodyPlant, instance) -> np.ndarray:
+    """The 4 x (nq + nv) matrix that picks [q_left, q_right, v_left, v_right] (rad, rad/s)
+    from the plant's full state."""
+    joints = [plant.GetJointByName(name, instance) for name in WHEEL_JOINTS]
+    rows = [j.position_start() for j in joints]
+    rows += [plant.num_positions() + j.velocity_start() for j in joints]
+    return np.eye(plant.num_multibody_states())[rows]
+
+
+def add_walle_controls(
+    builder: DiagramBuilder,
+    plant: MultibodyPlant,
+    instance,
+    scenario: WalleBalanceScenario,
+    robot: WalleParams,
+) -> dict:
+    """Adds the IMU, wheel encoders, pitch estimator, pushes and ``scenario.driver`` for the
+    robot ``instance`` of the finalised ``plant`` (added with ``add_walle``), and connects the
+    driver's torques to the plant.
+
+    Returns:
+        The ports by name: ``cmd_vel`` (the driver's ``[v, omega]`` input, m/s and rad/s;
+        None with no driver), and outputs ``imu``, ``wheel_state``, ``pitch_estimate``
+        (``[theta, theta_dot]``, rad, rad/s), ``wheel_torques`` (N m) and ``status`` (the
+        balance controller's, or None).
+    """
+    body = plant.GetBodyByName(BODY_LINK, instance)
+    p_BS = np.array([robot.imu.x, robot.imu.y, robot.imu.z])
+    imu = add_imu(builder, plant, body, scenario.imu, p_BS=p_BS)
+    encoders = builder.AddNamedSystem("wheel_encoders", MatrixGain(wheel_encoders(plant, instance)))
+    builder.Connect(plant.get_state_output_port(), encoders.get_input_port())
+    estimator = builder.AddNamedSystem(
+        "pitch_estimator",
+        PitchEstimator(wheel_radius=robot.wheel.radius, config=scenario.pitch_estimator),
+    )
+    builder.Connect(imu.GetOutputPort("imu"), estimator.GetInputPort("imu"))
+    builder.Connect(encoders.get_output_port(), estimator.GetInputPort("wheel_state"))
+    if scenario.pushes:  # Evaluated at every plant step: only when there is something to do.
+        pushes = builder.AddNamedSystem(
+            "pushes",
+            PushSchedule(
+                body_index=body.index(), p_BoBq_B=[0.0, 0.0, robot.top_z], pushes=scenario.pushes
+            ),
+        )
+        builder.Connect(pushes.get_output_port(), plant.get_applied_spatial_force_input_port())
+
+    ports = {"cmd_vel": None, "status": None}
+    if scenario.driver == "balance":
+        driver = builder.AddNamedSystem(
+            "balance_controller", BalanceController(robot=robot, config=scenario.balance)
+        )
+        builder.Connect(estimator.get_output_port(), driver.GetInputPort("pitch"))
+        ports["status"] = driver.GetOutputPort("status")
+    elif scenario.driver == "diff_drive":
+        driver = builder.AddNamedSystem(
+            "diff_drive", DiffDriveController(robot=robot, config=scenario.drive)
+        )
+        builder.Connect(imu.GetOutputPort("imu"), driver.GetInputPort("imu"))
+    else:
+        driver = builder.AddNamedSystem("motors_off", ConstantVectorSource(np.zeros(2)))
+    if scenario.driver != "none":
+        builder.Connect(encoders.get_output_port(), driver.GetInputPort("wheel_state"))
+        ports["cmd_vel"] = driver.GetInputPort("command")
+    torques = driver.get_output_port(0)
+    builder.Connect(torques, plant.get_actuation_input_port(instance))
+    ports.update(
+        imu=imu.GetOutputPort("imu"),
+        wheel_state=encoders.get_output_port(),
+        pitch_estimate=estimator.get_output_port(),
+        wheel_torques=torques,
+    )
+    return ports
+
+
+def make_walle_diagram(
+    scenario: WalleBalanceScenario, robot: WalleParams, *, meshcat: Meshcat | None = None
+) -> Diagram:
+    """Builds Wall-E on a flat floor with its sensors, ``scenario.driver`` and the pushes.
+
+    The follow variant (support casters) is built when the driver is ``"diff_drive"``.
+
+    Exported ports: input ``cmd_vel`` (``[v, omega]``, m/s and rad/s, ROS's ``cmd_vel``; not
+    there when the driver is ``"none"``); outputs ``walle.state`` (the robot's plant state,
+    the ground truth), ``imu``, ``wheel_state``, ``pitch_estimate``, ``wheel_torques`` and
+    ``status`` (balance controller only). Loggers ``log_<name>`` record ``LOGGED``.
+    """
+    builder = DiagramBuilder()
+    plant, _ = AddMultibodyPlant(scenario.plant, builder)
+    add_ground(plant, scenario.ground)
+    instance = add_walle(plant, robot, name=ROBOT_NAME, support=scenario.driver == "diff_drive")
+    plant.Finalize()
+    plant.SetDefaultFloatingBaseBodyPose(
+        plant.GetBodyByName(BODY_LINK, instance), walle_start_pose(scenario.start, robot)
+    )
+    ports = add_walle_controls(builder, plant, instance, scenario, robot)
+    if ports["cmd_vel"] is not None:
+        builder.ExportInput(ports.pop("cmd_vel"), "cmd_vel")
+    ports["state"] = plant.get_state_output_port(instance)
+    for name, port in ports.items():
+        if port is not None:
+            builder.ExportOutput(port, f"{ROBOT_NAME}.state" if name == "state" else name)
+    for name in LOGGED:
+        LogVectorOutput(ports[name], builder, scenario.log_period).set_name(f"log_{name}")
+    if meshcat is not None:
+        ApplyVisualizationConfig(scenario.visualization, builder, meshcat=meshcat)
+    diagram = builder.Build()
+    diagram.set_name(f"{ROBOT_NAME}_balance")
+    return diagram
+
+
+@dc.dataclass
+class WalleTrack:
+    """The robot's true motion, sampled every log period: one entry per sample."""
+
+    t: np.ndarray  # s.
+    p_WA: np.ndarray  # 2 x N, the axle's midpoint on the floor, m.
+    yaw: np.ndarray  # rad, heading of the axle frame, unwrapped.
+    pitch: np.ndarray  # rad, lean about the axle, positive forward.
+
+
+def walle_track(diagram: Diagram, context, robot: WalleParams) -> WalleTrack:
+    """Reads the logged ground truth of a diagram from ``make_walle_diagram``."""
+    plant = diagram.GetSubsystemByName("plant")
+    instance = plant.GetModelInstanceByName(ROBOT_NAME)
+    body = plant.GetBodyByName(BODY_LINK, instance)
+    log = diagram.GetSubsystemByName("log_state").FindLog(context)
+    state = log.data()
+    # Where the body's quaternion and position sit in the instance's state.
+    indices = plant.GetPositionsFromArray(instance, np.arange(plant.num_positions()))
+    start = list(indices).index(body.floating_positions_start())
+    p_BA = np.array([0.0, 0.0, robot.axle_z])
+    points, yaws, pitches = [], [], []
+    for column in state.T:
+        R_WB = rotation_from_quaternion(column[start : start + 4])
+        points.append(column[start + 4 : start + 6] + (R_WB @ p_BA)[:2])
+        yaw, pitch = axle_yaw_and_pitch(R_WB)
+        yaws.append(yaw)
+        pitches.append(pitch)
+    return WalleTrack(log.sample_times(), np.array(points).T, np.unwrap(yaws), np.array(pitches))
+
+
+@dc.dataclass
+class WalleRun:
+    """What a headless run did, measured on the ground truth after ``settle_time``."""
+
+    fell: bool  # The lean passed the controller's fallen pitch.
+    max_abs_pitch_deg: float  # After settle_time.
+    max_drift_m: float  # Largest distance of the axle from where it started, after settle_time.
+    track: WalleTrack
+    sim_time_s: float
+    wall_time_s: float
+    real_time_factor: float
+
+
+def run_walle(
+    scenario: WalleBalanceScenario,
+    robot: WalleParams,
+    duration: float,
+    *,
+    cmd_vel=(0.0, 0.0),
+    settle_time: float = 1.0,
+    seed: int | None = None,
+) -> WalleRun:
+    """Builds the diagram, simulates ``duration`` s headless (flat out) with ``cmd_vel``
+    fixed, and measures the run. ``seed`` (default ``scenario.random_seed``) seeds the IMU."""
+    diagram = make_walle_diagram(scenario, robot)
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    diagram.SetRandomContext(
+        context, RandomGenerator(scenario.random_seed if seed is None else seed)
+    )
+    if diagram.HasInputPort("cmd_vel"):
+        diagram.GetInputPort("cmd_vel").FixValue(context, np.asarray(cmd_vel, float))
+    start = time.perf_counter()
+    simulator.AdvanceTo(duration)
+    wall = time.perf_counter() - start
+    track = walle_track(diagram, context, robot)
+    after = track.t >= settle_time
+    fallen = math.radians(scenario.balance.fallen_pitch)
+    drift = np.linalg.norm(track.p_WA - track.p_WA[:, :1], axis=0)
+    return WalleRun(
+        fell=bool(np.any(np.abs(track.pitch) > fallen)),
+        max_abs_pitch_deg=float(np.degrees(np.max(np.abs(track.pitch[after]), initial=0.0))),
+        max_drift_m=float(np.max(drift[after], initial=0.0)),
+        track=track,
+        sim_time_s=duration,
+        wall_time_s=wall,
+        real_time_factor=duration / wall if wall > 0 else math.inf,
+    )
