@@ -29,7 +29,8 @@ def make_ddrive_model_diagram(
         meshcat: where to draw (illustration and collision geometry), or None.
         frame_triad_length: length of the frame triads on each link, m; 0 hides them.
         joint_sliders: add a Meshcat slider per wheel joint (a ``JointSliders`` system named
-            ``joint_sliders``; run it with ``JointSliders.Run(diagram)``). Needs ``meshcat``.
+            ``joint_sliders``; ``drake_sim.view`` polls it in a loop that Ctrl-C can stop).
+            Needs ``meshcat``.
     """
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)

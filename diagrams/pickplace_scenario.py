@@ -132,7 +132,12 @@ def dump_pickplace_scenario(scenario: PickPlaceScenario) -> str:
 
 
 def check_scenario(scenario: PickPlaceScenario, where: str = "scenario") -> None:
-    """Raises ConfigError for values no section can use (ranges, sizes, names)."""
+    """Raises ConfigError for values no section can use (ranges, sizes, names), and for a
+    scene without the ``object`` to pick or the ``place`` to put it (a malformed file, not an
+    impossible task)."""
+    for key, what in (("object", "the box to pick"), ("place", "where to put the object")):
+        if scenario.scene is not None and getattr(scenario.scene, key) is None:
+            raise ConfigError(f"{where}: the scene has no '{key}' key ({what})")
     if scenario.mode not in MODES:
         raise ConfigError(f"{where}: 'mode' must be one of {', '.join(MODES)}")
     check_panda_config(scenario.robot, where)

@@ -1,16 +1,16 @@
 """``python -m drake_sim.flip``: the robot shuttles along a line by flipping over its axle.
 
 With a viewer (the default) it runs in real time in Meshcat, drawing the robot, its odometry
-trail and its true trail, until Ctrl-C or ``--duration``. ``--headless`` runs flat out for 20 s
-(or ``--duration``). ``--teleop`` turns the flip controller off: drive with the W/A/S/D keys
-and Space to stop, in the Meshcat page. ``--report`` writes the JSON report (README, Reports).
+trail and its true trail, until Ctrl-C (or SIGTERM) or ``--duration``; a stop still prints the
+summary and writes the report. ``--headless`` runs flat out for 20 s (or ``--duration``).
+``--teleop`` turns the flip controller off: drive with the W/A/S/D keys and Space to stop, in
+the Meshcat page. ``--report`` writes the JSON report (README, Reports).
 Exit codes: 0 for a completed run, 1 if the simulation failed, 2 for bad input.
 """
 
 import json
 import math
 import sys
-from pathlib import Path
 
 from pydrake.geometry import StartMeshcat
 
@@ -39,8 +39,10 @@ def _parse_args(argv):
         "when --headless)",
     )
     parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
-    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
-    parser.add_argument("--report", type=Path, help="write the JSON report")
+    parser.add_argument(
+        "--record", type=cli.output_file("replay"), help="write a self-contained HTML replay"
+    )
+    parser.add_argument("--report", type=cli.output_file("report"), help="write the JSON report")
     parser.add_argument("--seed", type=cli.non_negative_int, help="random seed (IMU noise)")
     parser.add_argument("--teleop", action="store_true", help="drive with Meshcat keys")
     parser.add_argument(
@@ -67,6 +69,18 @@ def apply_overrides(scenario: FlipScenario, overrides: list[str]) -> FlipScenari
     return scenario
 
 
+def _set_up_viewer(meshcat, scenario: FlipScenario, *, teleop: bool, record: bool) -> None:
+    """Points Meshcat's camera at the robot, hides the grid, and starts recording if asked."""
+    pose = scenario.scene.robot_pose
+    meshcat.SetCameraPose([pose.x - 0.6, pose.y - 2.0, 1.1], [pose.x + 0.4, pose.y, 0.15])
+    meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
+    if teleop:
+        keys = ", ".join(label for label, _, _ in BUTTONS)
+        print(f"teleop: click the Meshcat page, then use its buttons or keys: {keys}")
+    if record:
+        meshcat.StartRecording()
+
+
 def main(argv=None) -> int:
     args = _parse_args(argv)
     robot = load_robot_params(args.robot)
@@ -84,21 +98,16 @@ def main(argv=None) -> int:
         realtime=viewer,
         controller="teleop" if args.teleop else "flip",
     )
-    if meshcat is not None:
-        pose = scenario.scene.robot_pose
-        meshcat.SetCameraPose([pose.x - 0.6, pose.y - 2.0, 1.1], [pose.x + 0.4, pose.y, 0.15])
-        meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
-        if args.teleop:
-            keys = ", ".join(label for label, _, _ in BUTTONS)
-            print(f"teleop: click the Meshcat page, then use its buttons or keys: {keys}")
-        if args.record:
-            meshcat.StartRecording()
     failure = None
     try:
+        if meshcat is not None:
+            _set_up_viewer(meshcat, scenario, teleop=args.teleop, record=bool(args.record))
+        if viewer:
+            cli.announce(meshcat, "running")
         # A bar on long headless runs, on a terminal only (tqdm stays silent in logs).
         run.advance_to(duration, progress=args.headless and duration >= PROGRESS_MIN_DURATION)
     except KeyboardInterrupt:
-        pass
+        pass  # Ctrl-C or SIGTERM: a user stop, summarised like a finished run.
     except RuntimeError as e:
         failure = str(e).strip().splitlines()[0]
     finally:
@@ -114,8 +123,7 @@ def main(argv=None) -> int:
     )
     print(summary)
     if args.report:
-        args.report.parent.mkdir(parents=True, exist_ok=True)
-        args.report.write_text(json.dumps(report.to_dict(), indent=2) + "\n")
+        cli.write_text(args.report, json.dumps(report.to_dict(), indent=2) + "\n", "report")
     if failure is not None:
         print(
             f"error: simulation failed at t = {report.sim_time_s:.3f} s: {failure}", file=sys.stderr

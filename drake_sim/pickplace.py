@@ -1,11 +1,13 @@
 """``python -m drake_sim.pickplace``: the Panda picks the object and places it beyond the obstacle.
 
 With a viewer (the default) the station runs in real time in Meshcat: open the page, press
-"Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. ``--headless`` runs the task at
-once, flat out. ``--mode physics`` (default) simulates contact and grasps the object by friction;
-``--mode kinematic`` plays the planned motions back (Franka's fake hardware). Everything else
-comes from one scenario (``--scenario FILE``, default ``config/pickplace_scenario.yaml``;
-``diagrams.pickplace_scenario``), with ``--scene FILE`` and ``--set key=value`` on top.
+"Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. Ctrl-C or SIGTERM stop a run at
+any point, with a summary line (``stopped: ...`` before the task's end, and no report then).
+``--headless`` runs the task at once, flat out. ``--mode physics`` (default) simulates contact
+and grasps the object by friction; ``--mode kinematic`` plays the planned motions back (Franka's
+fake hardware). Everything else comes from one scenario (``--scenario FILE``, default
+``config/pickplace_scenario.yaml``; ``diagrams.pickplace_scenario``), with ``--scene FILE`` and
+``--set key=value`` on top.
 Exit codes: 0 on success, 1 when the task is impossible or a step failed (one stderr line names
 the step and the reason), 2 on bad input.
 """
@@ -14,7 +16,7 @@ import dataclasses as dc
 import json
 import logging
 import sys
-from pathlib import Path
+import time
 
 from pydrake.geometry import StartMeshcat
 
@@ -30,7 +32,7 @@ from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.errors import ErrorCode, PlanningError
-from planning.task.pick_place import PickPlaceTask, StepReport
+from planning.task.pick_place import STEPS, PickPlaceTask, StepReport
 
 BUTTON = "Pick"
 
@@ -41,17 +43,27 @@ def _parse_args(argv):
     )
     parser.add_argument(
         "--scenario",
-        type=Path,
+        type=cli.input_file("scenario file"),
         default=config_dir() / "pickplace_scenario.yaml",
         help="scenario YAML (default config/pickplace_scenario.yaml)",
     )
-    parser.add_argument("--scene", type=Path, help="scene YAML (replaces the scenario's scene)")
-    parser.add_argument("--station", type=Path, help="YAML of the scenario's station section")
+    parser.add_argument(
+        "--scene",
+        type=cli.input_file("scene file"),
+        help="scene YAML (replaces the scenario's scene)",
+    )
+    parser.add_argument(
+        "--station",
+        type=cli.input_file("station file"),
+        help="YAML of the scenario's station section",
+    )
     parser.add_argument("--mode", choices=MODES, help="default: the scenario's (physics)")
     parser.add_argument("--headless", action="store_true", help="no Meshcat, no pacing")
     parser.add_argument("--no-wait", action="store_true", help="with a viewer: start at once")
-    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
-    parser.add_argument("--report", type=Path, help="write the JSON report")
+    parser.add_argument(
+        "--record", type=cli.output_file("replay"), help="write a self-contained HTML replay"
+    )
+    parser.add_argument("--report", type=cli.output_file("report"), help="write the JSON report")
     parser.add_argument("--seed", type=cli.non_negative_int, help="planner random seed")
     parser.add_argument(
         "--set",
@@ -100,6 +112,37 @@ def _wait_for_button(mpi, meshcat) -> None:
     meshcat.DeleteButton(BUTTON)
 
 
+def _run_task(mpi, meshcat, scenario, args):
+    """Waits for the Pick button (with a viewer, unless ``--no-wait``) and runs the task.
+
+    Returns:
+        The task's report, or None when Ctrl-C or SIGTERM stopped it (a summary line says
+        how far it got).
+    """
+    steps = []
+
+    def on_step(step: StepReport) -> None:
+        steps.append(step)
+        _print_step(step)
+
+    wall_start = time.perf_counter()
+    try:
+        if not args.headless:
+            if args.no_wait:
+                cli.announce(meshcat, "running the task")
+            else:
+                _wait_for_button(mpi, meshcat)
+        return PickPlaceTask(mpi, scenario.task, on_step=on_step).run()
+    except (KeyboardInterrupt, SystemError) as e:  # SystemError: see cli.is_stop
+        if not cli.is_stop(e):
+            raise
+        print(
+            f"stopped: {len(steps)} of {len(STEPS)} steps done, {mpi.time:.1f} s simulated "
+            f"in {time.perf_counter() - wall_start:.1f} s"
+        )
+        return None
+
+
 def main(argv=None) -> int:
     args = _parse_args(argv)
     logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors only
@@ -119,22 +162,23 @@ def main(argv=None) -> int:
         meshcat.SetCameraPose([1.6, -1.2, 0.9], [0.4, 0.0, 0.15])
         if args.record:
             meshcat.StartRecording()
-    if viewer and not args.no_wait:
-        _wait_for_button(mpi, meshcat)
-    task = PickPlaceTask(mpi, scenario.task, on_step=_print_step)
-    report = task.run()
-    if args.record:
-        cli.write_replay(meshcat, args.record)
+    try:
+        report = _run_task(mpi, meshcat, scenario, args)
+    finally:
+        if args.record:
+            cli.write_replay(meshcat, args.record)
+    if report is None:
+        return cli.EXIT_OK  # a user stop
     data = {"mode": scenario.mode, **report.to_dict()}
     error = "n/a" if report.place_error_m is None else f"{report.place_error_m:.4f} m"
     print(
         f"{'success' if report.success else 'failure'}: place error {error}, planning "
         f"{report.planning_time_s:.2f} s, {report.sim_time_s:.1f} s simulated in "
-        f"{report.wall_time_s:.1f} s"
+        f"{report.wall_time_s:.1f} s",
+        flush=True,
     )
     if args.report:
-        args.report.parent.mkdir(parents=True, exist_ok=True)
-        args.report.write_text(json.dumps(data, indent=2) + "\n")
+        cli.write_text(args.report, json.dumps(data, indent=2) + "\n", "report")
     code = cli.EXIT_OK
     if not report.success:
         what = "impossible task" if report.impossible else f"step {report.failed_step} failed"
@@ -142,14 +186,15 @@ def main(argv=None) -> int:
         print(f"error: {what}: {reason}", file=sys.stderr, flush=True)
         code = cli.EXIT_FAILED
     if viewer:
-        print("Ctrl-C quits", flush=True)
+        cli.announce(meshcat, "showing the result")
         try:
             while True:
                 mpi.advance(0.1)
-        except KeyboardInterrupt:
-            pass
+        except (KeyboardInterrupt, SystemError) as e:
+            if not cli.is_stop(e):
+                raise
     return code
 
 
 if __name__ == "__main__":
-    sys.exit(cli.run(main))
+    cli.exit_at_once(cli.run(main))  # a stop does not wait for a planner thread to finish

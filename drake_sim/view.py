@@ -4,11 +4,12 @@ Without options, the robot stands in the street world with its link frames drawn
 real time until Ctrl-C, with the odometry display (the odometry's arrow and trail in blue, the
 true trail in green) and keyboard teleop: W/S faster forward/backward, A/D turn, Space stop.
 ``--view-only`` shows the robot alone with a slider per wheel joint, like
-joint_state_publisher_gui.
+joint_state_publisher_gui, until Ctrl-C or its Stop button. Both stop on Ctrl-C or SIGTERM (or
+after ``--duration``) with a one-line summary and exit code 0.
 """
 
 import sys
-from pathlib import Path
+import time
 
 import numpy as np
 from pydrake.geometry import StartMeshcat
@@ -20,6 +21,11 @@ from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
 from drake_sim.robots.ddrive import default_robot_file
 from drake_sim.robots.ddrive_params import load_robot_params
+
+STOP_BUTTON = "Stop"
+"""The ``--view-only`` page's button that ends the run, like Ctrl-C."""
+DRIVE_HELP = "drive: click the Meshcat page, then W/S faster forward/backward, A/D turn, Space stop"
+SLIDER_POLL_PERIOD = 0.02  # s of wall time between reads of the sliders.
 
 
 def _parse_args(argv):
@@ -36,22 +42,76 @@ def _parse_args(argv):
         default=None,
         help="seconds to run (simulated, or wall time with --view-only); default: until Ctrl-C",
     )
-    parser.add_argument("--record", type=Path, help="write a self-contained HTML replay")
+    parser.add_argument(
+        "--record", type=cli.output_file("replay"), help="write a self-contained HTML replay"
+    )
     return parser.parse_args(argv)
+
+
+def pose_with_sliders(diagram, meshcat, duration: float | None = None) -> tuple[np.ndarray, float]:
+    """Poses the robot from its joint sliders until ``duration`` s of wall time pass (forever
+    when None) or the page's ``STOP_BUTTON`` is pressed; Ctrl-C (``KeyboardInterrupt``) ends it
+    too, between two reads. It says so on stdout (``cli.announce``) as it starts.
+
+    ``JointSliders.Run`` does the same but waits in C++, where Ctrl-C cannot reach it.
+
+    Args:
+        diagram: a ``make_ddrive_model_diagram(..., joint_sliders=True)`` diagram.
+        meshcat: the Meshcat of its sliders.
+        duration: wall-time limit, s.
+
+    Returns:
+        The last joint positions (rad) and the wall time spent (s).
+    """
+    sliders = diagram.GetSubsystemByName("joint_sliders")
+    plant = diagram.GetSubsystemByName("plant")
+    context = diagram.CreateDefaultContext()
+    diagram.ExecuteInitializationEvents(context)
+    sliders_context = sliders.GetMyMutableContextFromRoot(context)
+    plant_context = plant.GetMyMutableContextFromRoot(context)
+    # Newer Drakes keep the slider values as discrete state, updated by a periodic event.
+    stateful = sliders_context.num_discrete_state_groups() > 0
+    start = time.monotonic()
+    meshcat.AddButton(STOP_BUTTON)
+    try:
+        cli.announce(meshcat, f"posing the wheels with the sliders (or press {STOP_BUTTON!r})")
+        q = None
+        while duration is None or time.monotonic() - start < duration:
+            if meshcat.GetButtonClicks(STOP_BUTTON) > 0:
+                break
+            if stateful:
+                update = sliders.EvalUniquePeriodicDiscreteUpdate(sliders_context)
+                sliders_context.SetDiscreteState(update)
+            new_q = sliders.get_output_port().Eval(sliders_context)
+            if q is None or not np.array_equal(new_q, q):
+                q = np.array(new_q)
+                plant.SetPositions(plant_context, q)
+                diagram.ForcedPublish(context)
+            time.sleep(SLIDER_POLL_PERIOD)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        meshcat.DeleteButton(STOP_BUTTON)
+    return plant.GetPositions(plant_context), time.monotonic() - start
+
+
+def _view_only(args, robot) -> int:
+    meshcat = StartMeshcat()
+    diagram = make_ddrive_model_diagram(robot, meshcat=meshcat, joint_sliders=True)
+    meshcat.SetCameraPose([1.0, -1.2, 0.6], [0.0, 0.0, robot.wheel.radius])
+    q, elapsed = pose_with_sliders(diagram, meshcat, args.duration)
+    if args.record:
+        cli.write_replay(meshcat, args.record, recording=False)
+    joints = ", ".join(f"{v:.2f}" for v in q)
+    print(f"viewed for {elapsed:.1f} s wall time; wheel joints at [{joints}] rad")
+    return cli.EXIT_OK
 
 
 def main(argv=None) -> int:
     args = _parse_args(argv)
     robot = load_robot_params(args.robot)
     if args.view_only:
-        meshcat = StartMeshcat()
-        diagram = make_ddrive_model_diagram(robot, meshcat=meshcat, joint_sliders=True)
-        sliders = diagram.GetSubsystemByName("joint_sliders")
-        meshcat.SetCameraPose([1.0, -1.2, 0.6], [0.0, 0.0, robot.wheel.radius])
-        sliders.Run(diagram, timeout=args.duration)
-        if args.record:
-            cli.write_replay(meshcat, args.record, recording=False)
-        return cli.EXIT_OK
+        return _view_only(args, robot)
 
     scenario = load_flip_scenario(args.config)
     meshcat = StartMeshcat()
@@ -59,11 +119,14 @@ def main(argv=None) -> int:
     pose = scenario.scene.robot_pose
     meshcat.SetCameraPose([pose.x - 2.5, pose.y - 2.5, 1.5], [pose.x + 0.5, pose.y, 0.2])
     meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
-    print("drive: click the Meshcat page, then W/S faster forward/backward, A/D turn, Space stop")
-    if args.record:
-        meshcat.StartRecording()
     try:
+        if args.record:
+            meshcat.StartRecording()
+        print(DRIVE_HELP)
+        cli.announce(meshcat, "running")
         run.advance_to(args.duration if args.duration is not None else np.inf)
+    except KeyboardInterrupt:
+        pass  # Ctrl-C or SIGTERM: a user stop.
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
@@ -71,5 +134,10 @@ def main(argv=None) -> int:
     return cli.EXIT_OK
 
 
+def console_main() -> int:
+    """The ``drake-sim-view`` script: ``main`` with one-line errors, exit codes and signals."""
+    return cli.run(main)
+
+
 if __name__ == "__main__":
-    sys.exit(cli.run(main))
+    sys.exit(console_main())

@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from drake_sim.base import cli
+from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
 from planning._ompl_baseline import ompl_available, ompl_plan
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
@@ -174,44 +176,57 @@ def _stats(group: list[dict], compare: bool) -> str:
     return text
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
+def _parse_args(argv):
+    parser = cli.ArgumentParser(
         prog="python -m planning.benchmark",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(
         "--dataset",
-        type=Path,
+        type=cli.input_path("dataset"),
         default=None,
         help="problems folder, folder with problems.tar.bz2, or the archive "
         "(default: the repository's benchmarks/data/mbm_panda)",
     )
-    parser.add_argument("--families", nargs="+", default=list(mbm.FAMILIES))
-    parser.add_argument("--limit", type=int, default=None, help="first N problems per family")
-    parser.add_argument("--timeout", type=float, default=5.0, help="s per problem")
-    parser.add_argument("--report", type=Path, default=None, help="JSON report, one row each")
-    parser.add_argument("--options", type=Path, default=None, help="planner options YAML")
+    parser.add_argument("--families", nargs="+", choices=mbm.FAMILIES, default=list(mbm.FAMILIES))
+    parser.add_argument("--limit", type=cli.positive_int, help="first N problems per family")
+    parser.add_argument("--timeout", type=cli.positive_float, default=5.0, help="s per problem")
+    parser.add_argument(
+        "--report", type=cli.output_file("report"), help="JSON report, one row each"
+    )
+    parser.add_argument(
+        "--options", type=cli.input_file("options file"), help="planner options YAML"
+    )
     parser.add_argument(
         "--compare-ompl", action="store_true", help="also run OMPL RRTConnect+simplify"
     )
     parser.add_argument(
-        "--plot", type=Path, default=None, help="PNG with histograms of the times (matplotlib)"
+        "--plot",
+        type=cli.output_file("plot"),
+        help="PNG with histograms of the times (matplotlib)",
     )
     args = parser.parse_args(argv)
-    unknown = sorted(set(args.families) - set(mbm.FAMILIES))
-    if unknown or args.timeout <= 0 or (args.limit is not None and args.limit < 1):
-        print(f"bad arguments: unknown families {unknown} or non-positive values", file=sys.stderr)
-        return 2
     if args.compare_ompl and not ompl_available():
-        print("--compare-ompl needs the ompl package (pip install ompl)", file=sys.stderr)
-        return 2
+        raise ConfigError("--compare-ompl needs the ompl package (pip install ompl)")
     try:
-        folder = problems_folder(args.dataset or mbm.default_dataset())
-        options = load_planner_options(args.options) if args.options else MotionPlannerOptions()
+        args.dataset = problems_folder(args.dataset or mbm.default_dataset())
+        args.options = load_planner_options(args.options) if args.options else None
     except (FileNotFoundError, RuntimeError, ValueError) as e:
-        print(str(e).splitlines()[0], file=sys.stderr)
-        return 2
+        raise ConfigError(str(e).splitlines()[0]) from None
+    return args
+
+
+def main(argv=None) -> int:
+    """Runs the benchmark; returns the exit code (``drake_sim.base.cli.run``: 2 with one stderr
+    line on bad input, 0 on Ctrl-C or SIGTERM)."""
+    return cli.run(_main, argv)
+
+
+def _main(argv) -> int:
+    args = _parse_args(argv)
+    folder = args.dataset
+    options = args.options or MotionPlannerOptions()
     if args.compare_ompl:
         from ompl import util as ou
 
@@ -238,8 +253,9 @@ def main(argv=None) -> int:
     bar.close()
     print(summarize(rows))
     if args.report is not None:
-        args.report.write_text(json.dumps(rows, indent=1))
+        cli.write_text(args.report, json.dumps(rows, indent=1), "report")
     if args.plot is not None:
+        args.plot.parent.mkdir(parents=True, exist_ok=True)
         plot_times(rows, args.plot)
     return 0
 
@@ -308,4 +324,4 @@ def plot_times(rows: list[dict], filename: Path) -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main())  # main runs under drake_sim.base.cli.run

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_sim.base.cli import ArgumentParser, positive_float, run
+from drake_sim.base.cli import ArgumentParser, input_file, positive_float, run
 from drake_sim.base.errors import ConfigError
 
 
@@ -90,16 +90,18 @@ def _load_options(args):
 
 def main(argv=None) -> int:
     parser = ArgumentParser(prog="python -m planning.regions", description=__doc__)
-    parser.add_argument("--scene", type=Path, required=True, help="pick-and-place scene YAML")
+    parser.add_argument(
+        "--scene", type=input_file("scene file"), required=True, help="pick-and-place scene YAML"
+    )
     parser.add_argument("--named", nargs="*", default=["ready"], help="named seed states")
     parser.add_argument("--no-pick-place", action="store_true", help="no pre-grasp/pre-place")
     parser.add_argument("--approach-height", type=positive_float, default=0.12, help="m")
-    parser.add_argument("--seeds", type=Path, help="YAML list of 7-joint seeds, rad")
-    parser.add_argument("--options", type=Path, help="RegionOptions YAML")
+    parser.add_argument(
+        "--seeds", type=input_file("seeds file"), help="YAML list of 7-joint seeds, rad"
+    )
+    parser.add_argument("--options", type=input_file("options file"), help="RegionOptions YAML")
     parser.add_argument("--set", action="append", default=[], help="RegionOptions key=value")
     args = parser.parse_args(argv)
-    if not args.scene.is_file():
-        raise ConfigError(f"--scene {args.scene}: no such file")
     options = _load_options(args)
 
     from planning import PlanningError, PlanningScene, RobotState

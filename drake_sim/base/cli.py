@@ -1,8 +1,19 @@
-"""Shared command-line plumbing: one-line errors and exit code 2 on bad input."""
+"""Shared command-line plumbing: one-line errors and exit code 2 on bad input, path arguments
+checked before a run starts, and SIGTERM handled like Ctrl-C.
+
+An entry point builds its options with ``ArgumentParser`` and these argparse types (files it
+reads: ``input_file``; files and folders it writes: ``output_file``, ``output_dir``), and runs
+``sys.exit(run(main))``: a bad path, like any other bad input, is then one line on stderr and exit
+code 2 before anything is built or simulated, and Ctrl-C or SIGTERM end the run with code 0.
+"""
 
 import argparse
+import contextlib
+import os
+import signal
 import sys
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from drake_sim.base.errors import ConfigError
@@ -10,6 +21,11 @@ from drake_sim.base.errors import ConfigError
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
+
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+"""The signals that stop a run like Ctrl-C (``stop_on_signals``)."""
+
+_EMPTY_CHECK_BYTES = 4096  # A file shorter than this and only whitespace is empty.
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -23,15 +39,68 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
     """Runs ``main(argv)`` and turns bad input into one stderr line and exit code 2.
 
     ``ConfigError`` (every loader turns bad input into one) is reported as ``error: <message>``
-    on one line; Ctrl-C ends the run quietly with code 0. Anything else is a bug and is raised.
+    on one line; Ctrl-C and SIGTERM (``stop_on_signals``, ``is_stop``) end the run quietly with
+    code 0, after whatever summary ``main`` prints when it catches them. Anything else is a bug
+    and is raised.
     """
     try:
-        return main(argv)
+        with stop_on_signals():
+            return main(argv)
     except ConfigError as e:
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)  # one line
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as e:
+        if not is_stop(e):
+            raise
         return EXIT_OK
+
+
+def is_stop(error: BaseException) -> bool:
+    """Whether ``error`` is a user stop: a ``KeyboardInterrupt`` (Ctrl-C, or SIGTERM under
+    ``stop_on_signals``), also when compiled code wrapped it on its way out (numba-compiled
+    functions turn an interrupt that lands in their callbacks into a ``SystemError`` caused by
+    it). Catch ``(KeyboardInterrupt, SystemError)`` and re-raise what this says is not a stop.
+    """
+    while isinstance(error, SystemError) and error.__cause__ is not None:
+        error = error.__cause__
+    return isinstance(error, KeyboardInterrupt)
+
+
+def exit_at_once(code: int) -> None:
+    """Ends the process with ``code`` now, with stdout and stderr flushed, but without waiting
+    for worker threads or running ``atexit`` hooks.
+
+    For an entry point whose worker threads may still be busy when Ctrl-C or SIGTERM stops it
+    (a motion planner searching until its timeout), so that the stop takes effect at once:
+    ``exit_at_once(run(main))``. Its files are written and closed by then.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(code)
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def stop_on_signals(signals: Sequence[int] = STOP_SIGNALS) -> Iterator[None]:
+    """Within the block, each of ``signals`` raises ``KeyboardInterrupt`` in the main thread.
+
+    So SIGTERM stops a run the way Ctrl-C does (Drake's ``Simulator.AdvanceTo`` checks for
+    Python signals as it steps), and SIGINT does even where a parent process ignored it. The
+    previous handlers come back at the end. Outside the main thread it does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.signal(s, _interrupt) for s in signals}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 
 
 def positive_float(text: str) -> float:
@@ -65,20 +134,133 @@ def _int_at_least(text: str, minimum: int) -> int:
     return value
 
 
+def input_file(what: str = "file") -> Callable[[str], Path]:
+    """argparse type for a file to read: it exists, is not a directory, can be opened and is
+    not empty (nothing but whitespace). Messages name it ``what`` ("robot file").
+
+    Whether its contents are valid (UTF-8, YAML, keys) is the loader's to say.
+    """
+
+    def check(text: str) -> Path:
+        path = Path(text)
+        if not path.exists():
+            raise argparse.ArgumentTypeError(f"{what} not found: {text}")
+        if path.is_dir():
+            raise argparse.ArgumentTypeError(f"{what} is a directory: {text}")
+        if path.is_file():  # not a pipe: reading one would take what the program needs
+            try:
+                with path.open("rb") as f:
+                    head = f.read(_EMPTY_CHECK_BYTES)
+            except OSError as e:
+                raise argparse.ArgumentTypeError(
+                    f"{what} cannot be read: {text} ({e.strerror})"
+                ) from None
+            if len(head) < _EMPTY_CHECK_BYTES and not head.strip():
+                raise argparse.ArgumentTypeError(f"{what} is empty: {text}")
+        return path
+
+    return check
+
+
+def input_path(what: str = "path") -> Callable[[str], Path]:
+    """argparse type for a file or folder to read: it exists and can be read."""
+
+    def check(text: str) -> Path:
+        path = Path(text)
+        if not path.exists():
+            raise argparse.ArgumentTypeError(f"{what} not found: {text}")
+        if not os.access(path, os.R_OK):
+            raise argparse.ArgumentTypeError(f"{what} cannot be read: {text} (no permission)")
+        return path
+
+    return check
+
+
+def output_file(what: str = "file") -> Callable[[str], Path]:
+    """argparse type for a file to write: not a directory, and its folder exists and can be
+    written, or can be made (its nearest existing parent is a writable directory)."""
+
+    def check(text: str) -> Path:
+        path = Path(text)
+        if text.endswith(("/", os.sep)) or path.is_dir():
+            raise argparse.ArgumentTypeError(f"{what} is a directory: {text}")
+        if path.exists() and not os.access(path, os.W_OK):
+            raise argparse.ArgumentTypeError(f"{what} cannot be written: {text} (read-only)")
+        _check_writable_parent(path.parent, what, text)
+        return path
+
+    return check
+
+
+def output_dir(what: str = "folder") -> Callable[[str], Path]:
+    """argparse type for a folder to write into: a writable directory, or one that can be
+    made (its nearest existing parent is a writable directory)."""
+
+    def check(text: str) -> Path:
+        path = Path(text)
+        if path.exists() and not path.is_dir():
+            raise argparse.ArgumentTypeError(f"{what} is not a directory: {text}")
+        _check_writable_parent(path, what, text)
+        return path
+
+    return check
+
+
+def _check_writable_parent(folder: Path, what: str, text: str) -> None:
+    """Raises ArgumentTypeError unless ``folder`` or its nearest existing parent is a directory
+    that can be written."""
+    folder = folder.absolute()
+    existing = next(p for p in (folder, *folder.parents) if p.exists())
+    if not existing.is_dir():
+        raise argparse.ArgumentTypeError(
+            f"{what} cannot be written: {text} ({existing} is not a directory)"
+        )
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(
+            f"{what} cannot be written: {text} ({existing} is not writable)"
+        )
+
+
+def write_text(path: Path, text: str, what: str = "file") -> None:
+    """Writes ``text`` to ``path``, making its folder.
+
+    Raises:
+        ConfigError: the file cannot be written (one line naming it and why).
+    """
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    except OSError as e:
+        raise ConfigError(f"{what} cannot be written: {path} ({e.strerror})") from None
+
+
 def add_robot_and_config_options(
     parser: argparse.ArgumentParser, *, default_robot: Path, default_config: Path
 ) -> None:
-    """Adds ``--robot FILE`` and ``--config FILE`` with these defaults."""
-    parser.add_argument("--robot", type=Path, default=default_robot, help="robot YAML")
-    parser.add_argument("--config", type=Path, default=default_config, help="scenario YAML")
+    """Adds ``--robot FILE`` and ``--config FILE`` with these defaults (checked as
+    ``input_file``s when given)."""
+    parser.add_argument(
+        "--robot", type=input_file("robot file"), default=default_robot, help="robot YAML"
+    )
+    parser.add_argument(
+        "--config", type=input_file("scenario file"), default=default_config, help="scenario YAML"
+    )
+
+
+def announce(meshcat, doing: str) -> None:
+    """Prints, at once, that the run is ``doing`` at Meshcat's URL and that Ctrl-C stops it."""
+    print(f"{doing} at {meshcat.web_url()} (Ctrl-C stops)", flush=True)
 
 
 def write_replay(meshcat, path: Path, *, recording: bool = True) -> None:
     """Writes Meshcat's scene as a self-contained HTML file, with the recording (stopped and
-    published first) if ``recording``."""
+    published first) if ``recording``.
+
+    Raises:
+        ConfigError: the file cannot be written.
+    """
     if recording:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(meshcat.StaticHtml())
+    write_text(path, meshcat.StaticHtml(), "replay")
     print(f"wrote {path}")

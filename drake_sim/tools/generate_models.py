@@ -14,7 +14,6 @@ Frames: every model's origin is at the centre of its footprint on the ground (z 
 
 from __future__ import annotations
 
-import argparse
 import io
 import sys
 from dataclasses import dataclass
@@ -23,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from drake_sim.base import cli
 from drake_sim.base.obj_mesh import ObjWriter, box, extrude, frustum, mtl
 from drake_sim.base.resources import models_dir
 
@@ -264,11 +264,13 @@ def differences(files: dict[Path, bytes | np.ndarray]) -> list[Path]:
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry point; returns the exit code."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = cli.ArgumentParser(
+        prog="python -m drake_sim.tools.generate_models", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "--check", action="store_true", help="exit 1 if any generated file on disk differs"
     )
-    parser.add_argument("--models", type=Path, default=None, help="models folder to write")
+    parser.add_argument("--models", type=cli.output_dir("models folder"), help="folder to write")
     args = parser.parse_args(argv)
     root = args.models or models_dir()
     files = generate(root)
@@ -283,4 +285,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(cli.run(main))

@@ -173,7 +173,9 @@ def _parse_args(argv):
     parser = cli.ArgumentParser(
         prog="python -m drake_sim.tools.readme_pictures", description=__doc__.split("\n")[0]
     )
-    parser.add_argument("--out", type=Path, default=IMAGES_DIR, help="folder for the pictures")
+    parser.add_argument(
+        "--out", type=cli.output_dir("picture folder"), default=IMAGES_DIR, help="folder to write"
+    )
     parser.add_argument(
         "--only", nargs="+", choices=sorted(PICTURES), default=list(PICTURES), help="a subset"
     )

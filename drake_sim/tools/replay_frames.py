@@ -176,8 +176,8 @@ def _parse_args(argv):
     parser = cli.ArgumentParser(
         prog="python -m drake_sim.tools.replay_frames", description=__doc__.split("\n")[0]
     )
-    parser.add_argument("replay", type=Path, help="a Meshcat replay HTML (--record)")
-    parser.add_argument("out", type=Path, help="the GIF to write")
+    parser.add_argument("replay", type=cli.input_file("replay"), help="a Meshcat replay (--record)")
+    parser.add_argument("out", type=cli.output_file("GIF"), help="the GIF to write")
     parser.add_argument("--frames", type=cli.positive_int, default=40, help="pictures (default 40)")
     parser.add_argument("--size", type=_size, default=(640, 400), help="WxH (default 640x400)")
     parser.add_argument("--fps", type=cli.positive_float, default=10.0, help="GIF frame rate")
@@ -187,8 +187,6 @@ def _parse_args(argv):
         "--camera", type=_camera, help="X,Y,Z,TX,TY,TZ: camera and target (m, world frame)"
     )
     args = parser.parse_args(argv)
-    if not args.replay.is_file():
-        raise ConfigError(f"replay not found: {args.replay}")
     if find_chromium() is None:
         raise ConfigError("no Chromium found: install it (apt-get install chromium)")
     return args

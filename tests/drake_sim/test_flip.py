@@ -175,3 +175,48 @@ def test_runs_as_a_module_and_exits_0(tmp_path):
     assert result.stderr == ""
     assert "flips 0" in result.stdout
     assert json.loads(out.read_text())["finite"] is True
+
+
+def _latin1_file(tmp_path, text="# réglage par défaut\nflip: {drive_speed: 0.5}\n"):
+    path = tmp_path / "latin1.yaml"
+    path.write_bytes(text.encode("latin-1"))  # "é" is one byte, not UTF-8
+    return path
+
+
+def _file(tmp_path, text=""):
+    path = tmp_path / "file.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "make_args, needle",
+    [
+        (lambda p: ["--robot", str(_latin1_file(p))], "not UTF-8"),
+        (lambda p: ["--config", str(_latin1_file(p))], "not UTF-8"),
+        (lambda p: ["--config", str(_file(p))], "scenario file is empty"),
+        (lambda p: ["--config", str(_file(p, "\n  \n"))], "scenario file is empty"),
+        (lambda p: ["--config", str(p)], "scenario file is a directory"),
+        (lambda p: ["--robot", str(p)], "robot file is a directory"),
+        (lambda p: ["--robot", str(p / "none.yaml")], "robot file not found"),
+        (lambda p: ["--report", str(p)], "report is a directory"),
+        (lambda p: ["--report", f"{_file(p)}/report.json"], "file.yaml is not a directory"),
+        (lambda p: ["--record", f"{_file(p)}/out/replay.html"], "file.yaml is not a directory"),
+    ],
+    ids=[
+        "robot-not-utf8",
+        "config-not-utf8",
+        "config-empty",
+        "config-blank",
+        "config-directory",
+        "robot-directory",
+        "robot-missing",
+        "report-directory",
+        "report-parent-is-a-file",
+        "record-parent-is-a-file",
+    ],
+)
+def test_bad_file_is_one_line_and_exit_2_before_the_run(tmp_path, make_args, needle):
+    result = _run("--headless", "--duration", "30", *make_args(tmp_path))
+    assert_bad_input(result, needle)
+    assert result.stdout == ""  # no summary: nothing was simulated

@@ -82,8 +82,18 @@ def _set(key, index, value):
         (_set("object", "position", [0.5, float("nan"), 0.04]), "object"),
         (_set("object", "mass", 0.0), "mass"),
         (_set("obstacle", "size", [0.3, 0.04]), "obstacle"),
+        (lambda d: d.pop("place"), "the scene has no 'place' key"),
+        (lambda d: d.pop("object"), "the scene has no 'object' key"),
     ],
-    ids=["unknown_key", "negative_size", "nan_position", "zero_mass", "short_size"],
+    ids=[
+        "unknown_key",
+        "negative_size",
+        "nan_position",
+        "zero_mass",
+        "short_size",
+        "no_place",
+        "no_object",
+    ],
 )
 def test_bad_scene_exits_2(tmp_path, edit, needle):
     result = run_cli("--headless", "--scene", str(scene_file(tmp_path, edit)))
@@ -95,7 +105,7 @@ def test_bad_scene_exits_2(tmp_path, edit, needle):
     [
         (["--mode", "hardware"], "--mode"),
         (["--seed", "-1"], "--seed"),
-        (["--scene", "/no/such/scene.yaml"], "no such file"),
+        (["--scene", "/no/such/scene.yaml"], "scene file not found"),
         (["--bogus"], "--bogus"),
     ],
 )
@@ -107,3 +117,29 @@ def test_malformed_yaml_exits_2(tmp_path):
     path = tmp_path / "scene.yaml"
     path.write_text("object: {size: [0.05, 0.05\n")
     assert_bad_input(run_cli("--headless", "--scene", str(path)), "scene.yaml")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        pytest.param(["--scene", "{latin1}"], "not UTF-8", id="scene-not-utf8"),
+        pytest.param(["--scenario", "{latin1}"], "not UTF-8", id="scenario-not-utf8"),
+        pytest.param(["--station", "{latin1}"], "not UTF-8", id="station-not-utf8"),
+        pytest.param(["--scene", "{tmp}"], "scene file is a directory", id="scene-directory"),
+        pytest.param(["--scene", "{empty}"], "scene file is empty", id="scene-empty"),
+        pytest.param(["--scenario", "{empty}"], "scenario file is empty", id="scenario-empty"),
+        pytest.param(["--report", "{tmp}"], "report is a directory", id="report-directory"),
+        pytest.param(
+            ["--report", "{latin1}/report.json"], "latin1.yaml is not a directory", id="parent"
+        ),
+        pytest.param(["--record", "{tmp}/"], "replay is a directory", id="record-directory"),
+    ],
+)
+def test_bad_paths_exit_2_before_the_task(tmp_path, args, needle):
+    latin1, empty = tmp_path / "latin1.yaml", tmp_path / "empty.yaml"
+    latin1.write_bytes("place: {position: [0.5, 0.25, 0.04]}  # défaut\n".encode("latin-1"))
+    empty.write_text("")
+    names = {"latin1": latin1, "empty": empty, "tmp": tmp_path}
+    result = run_cli("--headless", "--mode", "kinematic", *(a.format(**names) for a in args))
+    assert_bad_input(result, needle)
+    assert result.stdout == ""  # no step ran

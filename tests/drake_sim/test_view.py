@@ -65,7 +65,7 @@ def test_malformed_or_missing_robot_file(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("body: {length: [")
     assert_bad_input(_run("--robot", str(bad)), "malformed")
-    assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "no such robot file")
+    assert_bad_input(_run("--robot", str(tmp_path / "missing.yaml")), "robot file not found")
 
 
 @pytest.mark.parametrize(
@@ -88,3 +88,28 @@ def test_bad_scenario_file(tmp_path):
     assert_bad_input(_run("--config", str(scenario)), "robot_pose.x")
     scenario.write_text("scene: {robot_pos: {x: 1}}\n")
     assert_bad_input(_run("--config", str(scenario)), "robot_pos")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        pytest.param(["--robot", "{latin1}"], "not UTF-8", id="robot-not-utf8"),
+        pytest.param(["--view-only", "--robot", "{latin1}"], "not UTF-8", id="view-only"),
+        pytest.param(["--config", "{latin1}"], "not UTF-8", id="config-not-utf8"),
+        pytest.param(["--robot", "{tmp}"], "robot file is a directory", id="robot-directory"),
+        pytest.param(["--config", "{empty}"], "scenario file is empty", id="config-empty"),
+        pytest.param(["--view-only", "--record", "{tmp}"], "replay is a directory", id="record"),
+        pytest.param(
+            ["--record", "{latin1}/replay.html"], "latin1.yaml is not a directory", id="parent"
+        ),
+    ],
+)
+def test_bad_paths_are_one_line_and_exit_2_before_viewing(tmp_path, args, needle):
+    """Non-UTF-8, empty or directory inputs, and outputs that cannot be written."""
+    latin1, empty = tmp_path / "latin1.yaml", tmp_path / "empty.yaml"
+    latin1.write_bytes("body: {length: 0.3}  # longueur, mètres\n".encode("latin-1"))
+    empty.write_text("")
+    files = {"latin1": latin1, "empty": empty, "tmp": tmp_path}
+    result = _run(*(a.format(**files) for a in args), "--duration", "30")
+    assert_bad_input(result, needle)
+    assert result.stdout == ""  # nothing was shown

@@ -1,8 +1,13 @@
 """drake_sim.base.cli: usage errors are ConfigErrors, ``run`` turns bad input into one stderr
-line and exit code 2 (Ctrl-C into 0), the argparse types reject bad text, and ``write_replay``
-writes Meshcat's scene as HTML."""
+line and exit code 2 (Ctrl-C and SIGTERM into 0), the argparse types reject bad text and bad
+paths, and ``write_replay`` writes Meshcat's scene as HTML."""
 
 import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -10,6 +15,7 @@ from pydrake.geometry import Meshcat, Rgba, Sphere
 
 import drake_sim.base.cli as mut
 from drake_sim.base.errors import ConfigError
+from tests.cli_helpers import assert_bad_input
 from tests.meshcat_html import scene_paths
 
 
@@ -102,6 +108,33 @@ def test_run_ends_quietly_on_ctrl_c(capsys):
     assert capsys.readouterr() == ("", "")
 
 
+def _wrapped_interrupt(argv):
+    """Raises what numba makes of an interrupt that lands in one of its callbacks."""
+    try:
+        raise KeyboardInterrupt("SIGINT")
+    except KeyboardInterrupt as e:
+        raise SystemError(
+            "<function _numba_unpickle> returned a result with an exception set"
+        ) from e
+
+
+def test_run_ends_quietly_on_an_interrupt_wrapped_by_compiled_code(capsys):
+    assert mut.run(_wrapped_interrupt) == mut.EXIT_OK
+    assert capsys.readouterr() == ("", "")
+    with pytest.raises(SystemError) as raised:
+        _wrapped_interrupt(None)
+    assert mut.is_stop(raised.value) and mut.is_stop(KeyboardInterrupt())
+    assert not mut.is_stop(SystemError("a real one")) and not mut.is_stop(ValueError())
+
+
+def test_run_lets_a_system_error_through():
+    def main(argv):
+        raise SystemError("a bug, not a stop")
+
+    with pytest.raises(SystemError):
+        mut.run(main)
+
+
 def test_run_lets_bugs_through():
     def main(argv):
         raise RuntimeError("a bug, not bad input")
@@ -115,10 +148,121 @@ def test_robot_and_config_options(tmp_path):
     mut.add_robot_and_config_options(
         dut, default_robot=tmp_path / "r.yaml", default_config=tmp_path / "c.yaml"
     )
-    args = dut.parse_args([])
+    args = dut.parse_args([])  # the defaults are not checked: their loaders name them
     assert (args.robot, args.config) == (tmp_path / "r.yaml", tmp_path / "c.yaml")
-    args = dut.parse_args(["--robot", "a.yaml", "--config", "b.yaml"])
-    assert (args.robot, args.config) == (Path("a.yaml"), Path("b.yaml"))
+    (tmp_path / "a.yaml").write_text("a: 1\n")
+    (tmp_path / "b.yaml").write_text("b: 2\n")
+    args = dut.parse_args(
+        ["--robot", str(tmp_path / "a.yaml"), "--config", str(tmp_path / "b.yaml")]
+    )
+    assert (args.robot, args.config) == (tmp_path / "a.yaml", tmp_path / "b.yaml")
+    with pytest.raises(ConfigError, match=r"argument --robot: robot file not found: .*x\.yaml"):
+        dut.parse_args(["--robot", str(tmp_path / "x.yaml")])
+    with pytest.raises(ConfigError, match=r"argument --config: scenario file is a directory"):
+        dut.parse_args(["--config", str(tmp_path)])
+
+
+def test_input_file(tmp_path):
+    check = mut.input_file("scene file")
+    good = tmp_path / "scene.yaml"
+    good.write_bytes(b"\xff\xfe not UTF-8: the loader's to say\n")
+    assert check(str(good)) == good
+    (tmp_path / "blank.yaml").write_text("  \n\t\n")
+    (tmp_path / "empty.yaml").write_text("")
+    for name, match in [
+        ("none.yaml", "scene file not found: "),
+        ("blank.yaml", "scene file is empty: "),
+        ("empty.yaml", "scene file is empty: "),
+        (".", "scene file is a directory: "),
+    ]:
+        with pytest.raises(argparse.ArgumentTypeError, match=match):
+            check(str(tmp_path / name))
+    assert mut.input_file()("/dev/null") == Path("/dev/null")  # not a regular file: not read
+
+
+def test_input_path(tmp_path):
+    check = mut.input_path("dataset")
+    assert check(str(tmp_path)) == tmp_path
+    with pytest.raises(argparse.ArgumentTypeError, match="dataset not found: "):
+        check(str(tmp_path / "none"))
+
+
+def test_output_file(tmp_path):
+    check = mut.output_file("report")
+    assert check(str(tmp_path / "r.json")) == tmp_path / "r.json"
+    assert check(str(tmp_path / "new" / "dir" / "r.json")) == tmp_path / "new/dir/r.json"
+    (tmp_path / "old.json").write_text("{}")
+    assert check(str(tmp_path / "old.json")) == tmp_path / "old.json"  # overwritten
+    for text, match in [
+        (str(tmp_path), "report is a directory: "),
+        (str(tmp_path / "new") + "/", "report is a directory: "),
+        (str(tmp_path / "old.json" / "r.json"), r"old\.json is not a directory\)"),
+        (str(tmp_path / "old.json" / "sub" / "r.json"), r"old\.json is not a directory\)"),
+    ]:
+        with pytest.raises(argparse.ArgumentTypeError, match=match):
+            check(text)
+    assert not (tmp_path / "new").exists()  # checked, not made
+
+
+def test_output_dir(tmp_path):
+    check = mut.output_dir("picture folder")
+    assert check(str(tmp_path)) == tmp_path
+    assert check(str(tmp_path / "new" / "images")) == tmp_path / "new/images"
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(argparse.ArgumentTypeError, match="picture folder is not a directory: "):
+        check(str(tmp_path / "file"))
+    with pytest.raises(argparse.ArgumentTypeError, match=r"file is not a directory\)"):
+        check(str(tmp_path / "file" / "images"))
+
+
+def test_write_text(tmp_path):
+    path = tmp_path / "a" / "b.json"
+    mut.write_text(path, "{}\n")
+    assert path.read_text() == "{}\n"
+    with pytest.raises(ConfigError, match=r"^report cannot be written: .*b\.json/c\.json \("):
+        mut.write_text(path / "c.json", "{}", "report")
+
+
+def test_parse_errors_on_paths_are_one_line_and_exit_2(tmp_path, capsys):
+    def main(argv):
+        parser = mut.ArgumentParser(prog="tool")
+        parser.add_argument("--report", type=mut.output_file("report"))
+        parser.parse_args(argv)
+        raise AssertionError("not reached: the path is checked first")
+
+    assert mut.run(main, ["--report", str(tmp_path)]) == mut.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert (
+        err == f"error: tool: argument --report: report is a directory: {tmp_path} (see --help)\n"
+    )
+
+
+def test_sigterm_stops_like_ctrl_c(capsys):
+    before = signal.getsignal(signal.SIGTERM)
+    stopped = []
+
+    def main(argv):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(60)  # not reached: the handler raises at once (or ends the sleep)
+        except KeyboardInterrupt as e:
+            stopped.append(str(e))
+            print("summary")
+            return mut.EXIT_OK
+        return mut.EXIT_FAILED
+
+    assert mut.run(main) == mut.EXIT_OK
+    assert stopped == ["SIGTERM"]
+    assert capsys.readouterr() == ("summary\n", "")
+    assert signal.getsignal(signal.SIGTERM) is before  # put back
+
+
+def test_stop_on_signals_raises_keyboard_interrupt_and_restores():
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt), mut.stop_on_signals():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(60)
+    assert signal.getsignal(signal.SIGINT) is before
 
 
 @pytest.fixture(scope="module")
@@ -142,3 +286,44 @@ def test_write_replay_without_recording(meshcat, tmp_path):
     path = tmp_path / "scene.html"
     mut.write_replay(meshcat, path, recording=False)
     assert "/drake/cube" in scene_paths(path.read_text())
+
+
+def test_exit_at_once_does_not_wait_for_worker_threads():
+    script = (
+        "import threading\n"
+        "from drake_sim.base import cli\n"
+        "never = threading.Event()\n"
+        "threading.Thread(target=never.wait).start()  # would keep a normal exit waiting\n"
+        "print('summary', end='')\n"
+        "cli.exit_at_once(3)\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=60
+    )
+    assert (result.returncode, result.stdout, result.stderr) == (3, "summary", "")
+
+
+@pytest.mark.parametrize(
+    "module, args, needle",
+    [
+        ("drake_sim.flip", ["--headless", "--config", "{tmp}"], "scenario file is a directory"),
+        ("drake_sim.view", ["--record", "{file}/r.html"], "is not a directory"),
+        ("drake_sim.pickplace", ["--headless", "--scene", "{tmp}"], "scene file is a directory"),
+        ("planning.benchmark", ["--report", "{tmp}"], "report is a directory"),
+        ("planning.benchmark", ["--options", "{file}"], "options file is empty"),
+        ("planning.regions", ["--scene", "{tmp}"], "scene file is a directory"),
+        ("drake_sim.tools.generate_models", ["--models", "{file}"], "is not a directory"),
+        ("drake_sim.tools.readme_pictures", ["--out", "{file}/images"], "is not a directory"),
+        ("drake_sim.tools.replay_frames", ["{file}", "out.gif"], "replay is empty"),
+        ("drake_sim.tools.replay_frames", ["{tmp}", "out.gif"], "replay is a directory"),
+    ],
+)
+def test_every_entry_point_checks_its_paths_first(tmp_path, module, args, needle):
+    file = tmp_path / "empty.txt"
+    file.write_text("")
+    argv = [a.format(tmp=tmp_path, file=file) for a in args]
+    result = subprocess.run(
+        [sys.executable, "-m", module, *argv], capture_output=True, text=True, timeout=300
+    )
+    assert_bad_input(result, needle)
+    assert result.stdout == ""

@@ -1,0 +1,129 @@
+"""Every viewer entry point stops cleanly on Ctrl-C (SIGINT) and on SIGTERM: exit code 0 and its
+summary line (issue #14).
+
+Each runs as ``python -m ...`` with a Meshcat viewer, is waited for until it prints the line
+with its Meshcat URL that says it is running, and is then signalled. The timeouts bound a hang;
+they are not speed assertions.
+"""
+
+import json
+import queue
+import signal
+import subprocess
+import sys
+import threading
+
+import pytest
+
+START_TIMEOUT = 180.0  # s, for the process to say it is running.
+STOP_TIMEOUT = 10.0  # s, for it to exit after the signal.
+
+
+class Cli:
+    """A ``python -m`` process whose stdout lines a thread collects as they come."""
+
+    def __init__(self, *args):
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", *map(str, args)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        self.lines: queue.Queue[str | None] = queue.Queue()
+        self.seen: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.process.stdout:
+            self.lines.put(line)
+        self.lines.put(None)  # end of output
+
+    def wait_for(self, marker: str) -> str:
+        """Returns the first stdout line holding ``marker`` (the process still running)."""
+        while (line := self.lines.get(timeout=START_TIMEOUT)) is not None:
+            self.seen.append(line)
+            if marker in line:
+                return line
+        code = self.process.wait(timeout=STOP_TIMEOUT)
+        raise AssertionError(f"exit code {code} before {marker!r}: {self.process.stderr.read()}")
+
+    def stop(self, signum: int) -> int:
+        """Sends ``signum``; returns the exit code, with the rest of stdout in ``seen``."""
+        self.process.send_signal(signum)
+        code = self.process.wait(timeout=STOP_TIMEOUT)
+        self._reader.join(timeout=STOP_TIMEOUT)
+        while (line := self.lines.get_nowait()) is not None:
+            self.seen.append(line)
+        return code
+
+    def kill(self) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+            self.process.wait()
+
+
+@pytest.fixture
+def start():
+    """Starts ``Cli``s and kills whichever still runs at the end of the test."""
+    started = []
+
+    def make(*args) -> Cli:
+        started.append(Cli(*args))
+        return started[-1]
+
+    yield make
+    for cli in started:
+        cli.kill()
+
+
+def _stopped_with(cli: Cli, signum: int, summary: str) -> None:
+    """Asserts that ``signum`` ends ``cli`` with exit code 0 and a line starting ``summary``."""
+    code = cli.stop(signum)
+    stderr = cli.process.stderr.read()
+    assert code == 0, stderr
+    assert "Traceback" not in stderr
+    assert any(line.startswith(summary) for line in cli.seen), cli.seen
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_flip_stops_with_its_summary_and_report(start, tmp_path, signum):
+    report, replay = tmp_path / "report.json", tmp_path / "replay.html"
+    cli = start("drake_sim.flip", "--set", "scene.world=''", "--report", report, "--record", replay)
+    assert "http://" in cli.wait_for("(Ctrl-C stops)")
+    _stopped_with(cli, signum, "flips ")
+    assert json.loads(report.read_text())["sim_time_s"] >= 0.0
+    assert replay.read_text().lstrip().lower().startswith("<!doctype html")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize(
+    "args, summary",
+    [([], "simulated "), (["--view-only"], "viewed for ")],
+    ids=["world", "view-only"],
+)
+def test_view_stops_with_its_summary(start, args, summary, signum):
+    cli = start("drake_sim.view", *args)
+    assert "http://" in cli.wait_for("(Ctrl-C stops)")
+    _stopped_with(cli, signum, summary)
+
+
+def test_pickplace_stops_while_waiting_for_pick(start):
+    cli = start("drake_sim.pickplace", "--mode", "kinematic")
+    assert "http://" in cli.wait_for("press 'Pick'")
+    _stopped_with(cli, signal.SIGTERM, "stopped: 0 of ")
+
+
+def test_pickplace_stops_during_the_task(start, tmp_path):
+    report = tmp_path / "report.json"
+    cli = start("drake_sim.pickplace", "--mode", "kinematic", "--no-wait", "--report", report)
+    cli.wait_for("] check ")  # the first step is done; the arm moves next
+    _stopped_with(cli, signal.SIGINT, "stopped: ")
+    assert not report.exists()  # a report is of a whole task
+
+
+def test_pickplace_stops_while_showing_the_result(start):
+    cli = start("drake_sim.pickplace", "--mode", "kinematic", "--no-wait")
+    assert "http://" in cli.wait_for("showing the result")
+    assert any(line.startswith("success: ") for line in cli.seen)
+    assert cli.stop(signal.SIGTERM) == 0
