@@ -190,15 +190,29 @@ def make_walle_diagram(
     if ports["cmd_vel"] is not None:
         builder.ExportInput(ports.pop("cmd_vel"), "cmd_vel")
     ports["state"] = plant.get_state_output_port(instance)
-    for name, port in ports.items():
+    return build_walle_diagram(builder, ports, scenario, LOGGED, meshcat, f"{ROBOT_NAME}_balance")
+
+
+def build_walle_diagram(
+    builder: DiagramBuilder,
+    ports: dict,
+    scenario: WalleBalanceScenario,
+    logged,
+    meshcat: Meshcat | None,
+    name: str,
+) -> Diagram:
+    """Exports ``ports`` (by name; ``state`` as ``walle.state``; None ones skipped), logs the
+    ``logged`` ones every ``scenario.log_period`` (sinks ``log_<name>``), draws in ``meshcat``
+    (if any) with ``scenario.visualization``, and builds the diagram called ``name``."""
+    for key, port in ports.items():
         if port is not None:
-            builder.ExportOutput(port, f"{ROBOT_NAME}.state" if name == "state" else name)
-    for name in LOGGED:
-        LogVectorOutput(ports[name], builder, scenario.log_period).set_name(f"log_{name}")
+            builder.ExportOutput(port, f"{ROBOT_NAME}.state" if key == "state" else key)
+    for key in logged:
+        LogVectorOutput(ports[key], builder, scenario.log_period).set_name(f"log_{key}")
     if meshcat is not None:
         ApplyVisualizationConfig(scenario.visualization, builder, meshcat=meshcat)
     diagram = builder.Build()
-    diagram.set_name(f"{ROBOT_NAME}_balance")
+    diagram.set_name(name)
     return diagram
 
 
