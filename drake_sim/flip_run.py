@@ -12,12 +12,13 @@ from tqdm import tqdm
 
 from diagrams.flip import make_flip_diagram
 from diagrams.flip_scenario import FlipScenario
+from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.ddrive_params import RobotParams
 from drake_sim.systems.control.flip_controller import STATUS_FIELDS, FlipMode
 
 
-@dc.dataclass
-class FlipReport:
+@dc.dataclass(kw_only=True)
+class FlipReport(RunReport):
     """What a run did. Distances in m, times in s. The keys are the README's (Reports)."""
 
     flips: int  # Completed half-turns over the axle.
@@ -33,13 +34,6 @@ class FlipReport:
     longest_time_without_flip_s: float  # Longest stretch between completed flips.
     stuck: bool  # True if the robot was still recovering at the end.
     finite: bool  # No NaN or infinity anywhere in the logged signals.
-    sim_time_s: float
-    wall_time_s: float
-    real_time_factor: float
-    seed: int
-
-    def to_dict(self) -> dict:
-        return dc.asdict(self)
 
 
 def summarize(
@@ -172,8 +166,5 @@ class FlipRun:
         return FlipReport(
             **figures,
             finite=all(bool(np.all(np.isfinite(s))) for s in signals),
-            sim_time_s=sim_time,
-            wall_time_s=self.wall_time,
-            real_time_factor=sim_time / self.wall_time if self.wall_time > 0 else math.inf,
-            seed=self.seed,
+            **run_times(sim_time, self.wall_time, self.seed),
         )

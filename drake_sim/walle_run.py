@@ -17,6 +17,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from diagrams.walle import expected_duration, make_walle_course_diagram
 from diagrams.walle_balance import ROBOT_NAME, walle_track
 from diagrams.walle_scenario import WalleScenario
+from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.walle import BODY_LINK
 from drake_sim.robots.walle_params import WalleParams
 from drake_sim.systems.axle import axle_yaw_and_pitch
@@ -30,9 +31,9 @@ ENDS = ("duration", "lap", "finish", "fell", "lost_line", "stopped", "failed")
 fell, the follower gave up searching for the line, a user stop, or a simulation error."""
 
 
-@dc.dataclass
-class WalleReport:
-    """What a run did. Distances in m, times in s, angles in degrees (DESIGN.md, Wall-E)."""
+@dc.dataclass(kw_only=True)
+class WalleReport(RunReport):
+    """What a run did. Distances in m, times in s, angles in degrees (README, Wall-E)."""
 
     fell: bool  # The lean passed the balance controller's fallen pitch.
     time_upright_s: float  # Until the fall, or the whole run.
@@ -42,17 +43,10 @@ class WalleReport:
     lap_time_s: float | None  # When the first lap (or the open course) was completed.
     mean_line_offset_m: float  # Mean distance of the axle's midpoint from the centreline.
     max_line_offset_m: float  # Largest such distance.
-    sim_time_s: float
-    wall_time_s: float
-    real_time_factor: float
-    seed: int
     mode: str
     progress_m: float  # Arc length passed in order (a loop's laps add up).
     lost_line: bool  # The follower gave up searching for the line (mode STOPPED).
     end: str  # Why the run ended: one of ENDS.
-
-    def to_dict(self) -> dict:
-        return dc.asdict(self)
 
 
 class WalleCourseRun:
@@ -184,10 +178,7 @@ class WalleCourseRun:
             lost_line=self.end == "lost_line",
             end=self.end,
             mode=self.scenario.mode,
-            sim_time_s=sim_time,
-            wall_time_s=self.wall_time,
-            real_time_factor=sim_time / self.wall_time if self.wall_time > 0 else math.inf,
-            seed=self.seed,
+            **run_times(sim_time, self.wall_time, self.seed),
         )
 
     def _laps(self, track) -> tuple[int, float | None]:
