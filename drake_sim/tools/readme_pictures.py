@@ -8,6 +8,8 @@
   by Drake's ``GetGraphvizString`` and Graphviz's ``dot``.
 * ``pickplace.gif``: the same as ``flip.gif`` for ``python -m drake_sim.pickplace``, made only
   when that module exists (skipped with a message until then).
+* ``walle.gif``: the same for ``python -m drake_sim.walle`` in ``both`` mode on the oval course
+  (``WALLE_GIF``, ``make_walle_gif``; not yet one of the ``--only`` groups).
 
 ``--only NAME ...`` makes a subset (``flip``, ``diagrams``, ``pickplace``). Exit code 2 with
 one line on stderr when ``dot`` or Chromium is missing for a picture that needs it.
@@ -65,6 +67,25 @@ PICKPLACE_GIF = GifSpec(
     camera=(1.3, -0.45, 0.75, 0.35, 0.0, 0.2),
 )
 """The pick-and-place task, once ``drake_sim.pickplace`` exists."""
+
+WALLE_GIF = GifSpec(
+    "drake_sim.walle",
+    (
+        "--mode",
+        "both",
+        "--course",
+        str(config_dir() / "courses" / "oval.yaml"),
+        "--duration",
+        "12",
+        "--seed",
+        "0",
+    ),
+    frames=120,
+    size=(640, 360),
+    camera=(0.75, -0.85, 1.15, 0.75, 0.5, 0.0),
+)
+"""Wall-E balancing round the oval's first straight and turn: 12 simulated seconds played in
+real time."""
 
 
 def need_dot() -> str:
@@ -159,14 +180,20 @@ def make_pickplace_gif(images: Path) -> list[Path]:
     return [replay_gif(PICKPLACE_GIF, images / "pickplace.gif")]
 
 
+def make_walle_gif(images: Path) -> list[Path]:
+    """``walle.gif``."""
+    return [replay_gif(WALLE_GIF, images / "walle.gif")]
+
+
 PICTURES: dict[str, Callable[[Path], list[Path]]] = {
     "flip": make_flip_gif,
     "diagrams": make_diagrams,
     "pickplace": make_pickplace_gif,
+    "walle": make_walle_gif,
 }
 """Each picture group and the function that writes it into a folder."""
 
-_NEEDS_CHROMIUM = ("flip", "pickplace")
+_NEEDS_CHROMIUM = ("flip", "pickplace", "walle")
 
 
 def _parse_args(argv):

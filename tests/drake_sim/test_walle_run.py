@@ -68,15 +68,17 @@ def test_a_hard_push_ends_the_run_with_a_fall():
 
 
 def test_losing_the_line_for_good_ends_the_run(tmp_path):
-    """At the end of a short open line, with no finish margin, the follower searches, turns
-    its full search angle without finding the line, and stops: the line is lost for good."""
-    course = _course(tmp_path, "segments: [{straight: 0.4}]\n")
+    """A detector that can never see the line (it asks for more contrast than an image has):
+    the follower searches, turns its full search angle without finding it, and stops; the line
+    is lost for good and the run ends there."""
+    course = _course(tmp_path, "segments: [{straight: 1.0}]\n")
     follower = dc.replace(scenario.line_follower, search_turn=1.0, search_omega=2.0)
+    blind = dc.replace(scenario.line_detector, min_contrast=256.0)
     _, report = _run(
-        scenario, robot, course, mode="follow", finish_margin=0.0, line_follower=follower
+        scenario, robot, course, mode="follow", line_follower=follower, line_detector=blind
     )
     assert report.end == "lost_line" and report.lost_line
-    assert 0.0 < report.course_fraction < 1.0 and report.laps == 0
+    assert report.course_fraction < 1.0 and report.laps == 0
 
 
 @pytest.mark.slow

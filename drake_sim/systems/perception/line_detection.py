@@ -158,7 +158,9 @@ def line_pixels(rgb: np.ndarray, config: LineDetectorConfig):
     grey = rgb.mean(axis=-1)
     smooth = _box3(rgb)
     grey_ok = smooth.max(axis=-1) - smooth.min(axis=-1) <= config.max_chroma
-    floor = float(np.median(grey))
+    # The floor's level: the median of the grey pixels only, so that a coloured background seen
+    # past the floor's edge (in turns, from a high camera) does not raise it.
+    floor = float(np.median(grey[grey_ok])) if grey_ok.any() else float(np.median(grey))
     candidates = _box3(grey[..., None])[..., 0][grey_ok]
     peak = float(candidates.max()) if candidates.size else floor
     if peak - floor < config.min_contrast:
