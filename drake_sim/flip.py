@@ -106,10 +106,13 @@ def main(argv=None) -> int:
             cli.announce(meshcat, "running")
         # A bar on long headless runs, on a terminal only (tqdm stays silent in logs).
         run.advance_to(duration, progress=args.headless and duration >= PROGRESS_MIN_DURATION)
-    except KeyboardInterrupt:
-        pass  # Ctrl-C or SIGTERM: a user stop, summarised like a finished run.
-    except RuntimeError as e:
-        failure = str(e).strip().splitlines()[0]
+    except BaseException as e:
+        if cli.is_stop(e):
+            pass  # Ctrl-C or SIGTERM: a user stop, summarised like a finished run.
+        elif isinstance(e, RuntimeError):
+            failure = str(e).strip().splitlines()[0]
+        else:
+            raise
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)

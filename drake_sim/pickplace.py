@@ -133,7 +133,7 @@ def _run_task(mpi, meshcat, scenario, args):
             else:
                 _wait_for_button(mpi, meshcat)
         return PickPlaceTask(mpi, scenario.task, on_step=on_step).run()
-    except (KeyboardInterrupt, SystemError) as e:  # SystemError: see cli.is_stop
+    except BaseException as e:  # a stop may surface as another error: see cli.is_stop
         if not cli.is_stop(e):
             raise
         print(
@@ -190,7 +190,7 @@ def main(argv=None) -> int:
         try:
             while True:
                 mpi.advance(0.1)
-        except (KeyboardInterrupt, SystemError) as e:
+        except BaseException as e:
             if not cli.is_stop(e):
                 raise
     return code

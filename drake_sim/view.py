@@ -88,8 +88,9 @@ def pose_with_sliders(diagram, meshcat, duration: float | None = None) -> tuple[
                 plant.SetPositions(plant_context, q)
                 diagram.ForcedPublish(context)
             time.sleep(SLIDER_POLL_PERIOD)
-    except KeyboardInterrupt:
-        pass
+    except BaseException as e:
+        if not cli.is_stop(e):
+            raise
     finally:
         meshcat.DeleteButton(STOP_BUTTON)
     return plant.GetPositions(plant_context), time.monotonic() - start
@@ -125,8 +126,9 @@ def main(argv=None) -> int:
         print(DRIVE_HELP)
         cli.announce(meshcat, "running")
         run.advance_to(args.duration if args.duration is not None else np.inf)
-    except KeyboardInterrupt:
-        pass  # Ctrl-C or SIGTERM: a user stop.
+    except BaseException as e:
+        if not cli.is_stop(e):
+            raise  # else Ctrl-C or SIGTERM: a user stop.
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)

@@ -17,6 +17,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from diagrams.walle import expected_duration, make_walle_course_diagram
 from diagrams.walle_balance import ROBOT_NAME, walle_track
 from diagrams.walle_scenario import WalleScenario
+from drake_sim.base import cli
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.walle import BODY_LINK
 from drake_sim.robots.walle_params import WalleParams
@@ -121,10 +122,13 @@ class WalleCourseRun:
                 t = min(duration, t + CHECK_PERIOD)
                 self.simulator.AdvanceTo(t)
                 self.end = self._check()
-        except KeyboardInterrupt:
-            self.end = "stopped"
-        except RuntimeError as e:
-            self.end, self.failure = "failed", str(e).strip().splitlines()[0]
+        except BaseException as e:
+            if cli.is_stop(e):
+                self.end = "stopped"
+            elif isinstance(e, RuntimeError):
+                self.end, self.failure = "failed", str(e).strip().splitlines()[0]
+            else:
+                raise
         finally:
             self.wall_time += time.perf_counter() - start
         return self.end

@@ -45,25 +45,37 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
     """
     try:
         with stop_on_signals():
-            return main(argv)
+            try:
+                return main(argv)
+            except ConfigError:
+                raise
+            except BaseException as e:  # checked while the handler is in force
+                if not is_stop(e):
+                    raise
+                return EXIT_OK
     except ConfigError as e:
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)  # one line
         return EXIT_BAD_INPUT
-    except (KeyboardInterrupt, SystemError) as e:
-        if not is_stop(e):
-            raise
-        return EXIT_OK
 
 
 def is_stop(error: BaseException) -> bool:
     """Whether ``error`` is a user stop: a ``KeyboardInterrupt`` (Ctrl-C, or SIGTERM under
-    ``stop_on_signals``), also when compiled code wrapped it on its way out (numba-compiled
-    functions turn an interrupt that lands in their callbacks into a ``SystemError`` caused by
-    it). Catch ``(KeyboardInterrupt, SystemError)`` and re-raise what this says is not a stop.
+    ``stop_on_signals``), or any error raised after ``stop_on_signals`` received a stop signal.
+
+    Compiled code can turn the interrupt that lands in its callbacks into another error:
+    numba-compiled functions raise a ``SystemError`` caused by it, and pybind11 (Drake's
+    bindings) reports an interrupt during argument conversion as a ``TypeError`` naming no
+    matching overload. Catch ``BaseException`` and re-raise what this says is not a stop.
     """
     while isinstance(error, SystemError) and error.__cause__ is not None:
         error = error.__cause__
-    return isinstance(error, KeyboardInterrupt)
+    return isinstance(error, KeyboardInterrupt) or stop_received()
+
+
+def stop_received() -> bool:
+    """Whether the ``stop_on_signals`` block now in force has received a stop signal."""
+    handler = signal.getsignal(signal.SIGINT)
+    return isinstance(handler, _SignalStop) and handler.received is not None
 
 
 def exit_at_once(code: int) -> None:
@@ -80,8 +92,16 @@ def exit_at_once(code: int) -> None:
     os._exit(code)
 
 
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt(signal.Signals(signum).name)
+class _SignalStop:
+    """The handler ``stop_on_signals`` installs: raises ``KeyboardInterrupt`` and remembers
+    the signal, so that ``is_stop`` knows an error raised after it is the stop's doing."""
+
+    def __init__(self):
+        self.received: int | None = None
+
+    def __call__(self, signum, frame):
+        self.received = signum
+        raise KeyboardInterrupt(signal.Signals(signum).name)
 
 
 @contextlib.contextmanager
@@ -95,7 +115,8 @@ def stop_on_signals(signals: Sequence[int] = STOP_SIGNALS) -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {s: signal.signal(s, _interrupt) for s in signals}
+    handler = _SignalStop()
+    previous = {s: signal.signal(s, handler) for s in signals}
     try:
         yield
     finally:

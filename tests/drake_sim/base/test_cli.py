@@ -127,6 +127,39 @@ def test_run_ends_quietly_on_an_interrupt_wrapped_by_compiled_code(capsys):
     assert not mut.is_stop(SystemError("a real one")) and not mut.is_stop(ValueError())
 
 
+def _swallowed_interrupt(argv):
+    """Receives SIGTERM and raises what pybind11 makes of an interrupt that lands while it
+    converts arguments: a TypeError naming no matching overload."""
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(60)
+    except KeyboardInterrupt:
+        pass  # swallowed by the compiled code
+    raise TypeError("__init__(): incompatible constructor arguments")
+
+
+def test_run_ends_quietly_on_any_error_raised_after_a_stop_signal(capsys):
+    assert mut.run(_swallowed_interrupt) == mut.EXIT_OK
+    assert capsys.readouterr() == ("", "")
+    assert not mut.stop_received()  # the handler is gone with its block
+
+
+def test_is_stop_is_false_for_errors_before_any_stop_signal():
+    with mut.stop_on_signals():
+        assert not mut.stop_received()
+        assert not mut.is_stop(TypeError("a real one"))
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(60)
+        assert mut.stop_received() and mut.is_stop(TypeError("after the stop"))
+
+    def main(argv):
+        raise TypeError("a bug, not a stop")
+
+    with pytest.raises(TypeError):
+        mut.run(main)
+
+
 def test_run_lets_a_system_error_through():
     def main(argv):
         raise SystemError("a bug, not a stop")
