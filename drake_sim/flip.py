@@ -107,12 +107,8 @@ def main(argv=None) -> int:
         # A bar on long headless runs, on a terminal only (tqdm stays silent in logs).
         run.advance_to(duration, progress=args.headless and duration >= PROGRESS_MIN_DURATION)
     except BaseException as e:
-        if cli.is_stop(e):
-            pass  # Ctrl-C or SIGTERM: a user stop, summarised like a finished run.
-        elif isinstance(e, RuntimeError):
-            failure = str(e).strip().splitlines()[0]
-        else:
-            raise
+        # A user stop is summarised like a finished run; a simulation error is reported.
+        failure = cli.run_ending(e)[1] or None
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)

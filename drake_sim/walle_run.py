@@ -123,12 +123,7 @@ class WalleCourseRun:
                 self.simulator.AdvanceTo(t)
                 self.end = self._check()
         except BaseException as e:
-            if cli.is_stop(e):
-                self.end = "stopped"
-            elif isinstance(e, RuntimeError):
-                self.end, self.failure = "failed", str(e).strip().splitlines()[0]
-            else:
-                raise
+            self.end, self.failure = cli.run_ending(e)
         finally:
             self.wall_time += time.perf_counter() - start
         return self.end

@@ -54,6 +54,8 @@ LAYERS = (
             "drake_sim.flip_run",
             "drake_sim.walle",
             "drake_sim.walle_run",
+            "drake_sim.mapping",
+            "drake_sim.mapping_run",
             "drake_sim.view",
             "drake_sim.pickplace",
             "drake_sim.tools",

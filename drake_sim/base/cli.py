@@ -72,6 +72,17 @@ def is_stop(error: BaseException) -> bool:
     return isinstance(error, KeyboardInterrupt) or stop_received()
 
 
+def run_ending(error: BaseException) -> tuple[str, str]:
+    """How ``error`` ends a simulation run: ``("stopped", "")`` for a user stop (``is_stop``),
+    ``("failed", <its first line>)`` for a ``RuntimeError`` (Drake's simulation errors); any
+    other error is a bug and is raised again."""
+    if is_stop(error):
+        return "stopped", ""
+    if isinstance(error, RuntimeError):
+        return "failed", (str(error).strip().splitlines() or [type(error).__name__])[0]
+    raise error
+
+
 def stop_received() -> bool:
     """Whether the ``stop_on_signals`` block now in force has received a stop signal."""
     handler = signal.getsignal(signal.SIGINT)

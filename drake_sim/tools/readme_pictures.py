@@ -9,9 +9,12 @@
 * ``pickplace.gif``: the same as ``flip.gif`` for ``python -m drake_sim.pickplace``, made only
   when that module exists (skipped with a message until then).
 * ``walle.gif``: the same for ``python -m drake_sim.walle`` in ``both`` mode on the oval course
-  (``WALLE_GIF``, ``make_walle_gif``; not yet one of the ``--only`` groups).
+  (``WALLE_GIF``, ``make_walle_gif``).
+* ``mapping.gif``: the same for ``python -m drake_sim.mapping`` on the room's default route
+  (``MAPPING_GIF``, ``make_mapping_gif``): the map grows as the robot drives.
 
-``--only NAME ...`` makes a subset (``flip``, ``diagrams``, ``pickplace``). Exit code 2 with
+``--only NAME ...`` makes a subset (``flip``, ``diagrams``, ``pickplace``, ``walle``,
+``mapping``). Exit code 2 with
 one line on stderr when ``dot`` or Chromium is missing for a picture that needs it.
 """
 
@@ -135,6 +138,17 @@ def panda_station_graphviz(max_depth: int = 1) -> str:
     return diagram.GetGraphvizString(max_depth=max_depth)
 
 
+MAPPING_GIF = GifSpec(
+    "drake_sim.mapping",
+    ("--arena", str(config_dir() / "arenas" / "room.yaml"), "--seed", "0"),
+    frames=120,
+    fps=12.0,
+    size=(640, 480),
+    camera=(0.0, -2.0, 7.5, 0.0, -0.2, 0.0),
+)
+"""The room mapped along its default route (about two simulated minutes), seen from above."""
+
+
 def record_replay(module: str, html: Path, args: Sequence[str] = ()) -> Path:
     """Runs ``python -m <module> --headless --record <html> <args>`` and returns ``html``.
 
@@ -185,15 +199,21 @@ def make_walle_gif(images: Path) -> list[Path]:
     return [replay_gif(WALLE_GIF, images / "walle.gif")]
 
 
+def make_mapping_gif(images: Path) -> list[Path]:
+    """``mapping.gif``."""
+    return [replay_gif(MAPPING_GIF, images / "mapping.gif")]
+
+
 PICTURES: dict[str, Callable[[Path], list[Path]]] = {
     "flip": make_flip_gif,
     "diagrams": make_diagrams,
     "pickplace": make_pickplace_gif,
     "walle": make_walle_gif,
+    "mapping": make_mapping_gif,
 }
 """Each picture group and the function that writes it into a folder."""
 
-_NEEDS_CHROMIUM = ("flip", "pickplace", "walle")
+_NEEDS_CHROMIUM = ("flip", "pickplace", "walle", "mapping")
 
 
 def _parse_args(argv):

@@ -1,4 +1,9 @@
-"""Differential-drive velocity control: a ``cmd_vel`` in, wheel torques out."""
+"""Differential-drive velocity control: a ``cmd_vel`` in, wheel torques out.
+
+The robot is any object with the attributes read here (``RobotParams``, ``WalleParams``,
+``Turtlebot3Params``): ``wheel.radius``, ``wheel.mass`` (m, kg), ``wheel_separation`` (m),
+``total_mass`` (kg) and ``motor.max_torque`` (N m, per wheel).
+"""
 
 import dataclasses as dc
 
@@ -68,11 +73,14 @@ class DiffDriveController(LeafSystem):
 
     ``command`` is ``[v, omega]`` in the body frame (m/s, rad/s), ROS's ``cmd_vel``;
     ``wheel_state`` is ``[q_left, q_right, v_left, v_right]``; ``imu`` the ``Imu`` output (only
-    its orientation is used, to drive the same way upside down). ``wheel_torques`` is
-    ``[left, right]`` in N m, held between control updates.
+    its orientation is used, to drive the same way upside down); a robot that cannot turn over
+    (``upside_down_aware=False``) has no ``imu`` input and is always taken upright.
+    ``wheel_torques`` is ``[left, right]`` in N m, held between control updates.
     """
 
-    def __init__(self, *, robot: RobotParams, config: DiffDriveConfig):
+    def __init__(
+        self, *, robot: RobotParams, config: DiffDriveConfig, upside_down_aware: bool = True
+    ):
         super().__init__()
         self._robot = robot
         self._config = config
@@ -82,7 +90,7 @@ class DiffDriveController(LeafSystem):
         self._max_torque = robot.motor.max_torque
         self._command = self.DeclareVectorInputPort("command", 2)
         self._wheels = self.DeclareVectorInputPort("wheel_state", 4)
-        self._imu = self.DeclareVectorInputPort("imu", IMU_SIZE)
+        self._imu = self.DeclareVectorInputPort("imu", IMU_SIZE) if upside_down_aware else None
         self._state = self.DeclareDiscreteState(6)
         self.DeclarePeriodicDiscreteUpdateEvent(self._dt, 0.0, self._update)
         self.DeclareVectorOutputPort(
@@ -109,7 +117,7 @@ class DiffDriveController(LeafSystem):
         w_ref += np.clip(
             w_cmd - w_ref, -c.max_angular_acceleration * dt, c.max_angular_acceleration * dt
         )
-        sign = up_sign(rotation_from_imu(self._imu.Eval(context)))
+        sign = 1.0 if self._imu is None else up_sign(rotation_from_imu(self._imu.Eval(context)))
         target = np.array(wheel_speed_targets(v_ref, w_ref, self._robot, sign))
         error = target - self._wheels.Eval(context)[2:4]
         integral = x[_INTEGRAL] + error * dt

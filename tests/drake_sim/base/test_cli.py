@@ -144,6 +144,14 @@ def test_run_ends_quietly_on_any_error_raised_after_a_stop_signal(capsys):
     assert not mut.stop_received()  # the handler is gone with its block
 
 
+def test_run_ending_sorts_stops_failures_and_bugs():
+    assert mut.run_ending(KeyboardInterrupt()) == ("stopped", "")
+    assert mut.run_ending(RuntimeError("  step failed\n  at t = 1\n")) == ("failed", "step failed")
+    assert mut.run_ending(RuntimeError("")) == ("failed", "RuntimeError")
+    with pytest.raises(ValueError, match="a bug"):
+        mut.run_ending(ValueError("a bug"))
+
+
 def test_is_stop_is_false_for_errors_before_any_stop_signal():
     with mut.stop_on_signals():
         assert not mut.stop_received()

@@ -2,6 +2,7 @@
 errors."""
 
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -57,7 +58,7 @@ def test_pickplace_hook_waits_for_its_module(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(mut, "PICKPLACE_GIF", spec)
     assert mut.make_pickplace_gif(tmp_path) == []
     assert "does not exist yet" in capsys.readouterr().out
-    assert set(mut.PICTURES) == {"flip", "diagrams", "pickplace", "walle"}
+    assert set(mut.PICTURES) == {"flip", "diagrams", "pickplace", "walle", "mapping"}
 
 
 def test_record_replay_reports_a_failed_run(tmp_path):
@@ -74,3 +75,11 @@ def test_replay_gif(tmp_path):
     spec = mut.GifSpec("drake_sim.flip", args, frames=3, size=(160, 100))
     out = mut.replay_gif(spec, tmp_path / "flip.gif")
     assert out.read_bytes().startswith(b"GIF89a")
+
+
+def test_the_mapping_gif_records_the_room_from_above():
+    spec = mut.MAPPING_GIF
+    assert spec.module == "drake_sim.mapping"
+    arena = spec.args[spec.args.index("--arena") + 1]
+    assert arena.endswith("room.yaml") and Path(arena).is_file()
+    assert spec.camera is not None and spec.camera[2] > 5.0  # well above the 6 x 5 m room

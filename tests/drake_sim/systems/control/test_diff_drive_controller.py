@@ -40,6 +40,22 @@ def test_upside_down_reverses_the_wheels():
     np.testing.assert_allclose(flipped, -upright)
 
 
+def test_a_robot_that_cannot_turn_over_needs_no_imu():
+    """upside_down_aware=False: no imu input, and the torques of an upright robot."""
+    robot = default_robot()
+    dut = mut.DiffDriveController(
+        robot=robot, config=mut.DiffDriveConfig(), upside_down_aware=False
+    )
+    assert not dut.HasInputPort("imu")
+    simulator = Simulator(dut)
+    context = simulator.get_mutable_context()
+    dut.GetInputPort("command").FixValue(context, [0.3, 0.5])
+    dut.GetInputPort("wheel_state").FixValue(context, np.zeros(4))
+    simulator.AdvanceTo(0.05)
+    upright, _ = _torques_after([0.3, 0.5], seconds=0.05)
+    np.testing.assert_array_equal(dut.GetOutputPort("wheel_torques").Eval(context), upright)
+
+
 def test_nan_command_stops():
     torques, _ = _torques_after([np.nan, 1.0])
     np.testing.assert_array_equal(torques, [0.0, 0.0])

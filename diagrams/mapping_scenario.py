@@ -1,0 +1,94 @@
+"""Typed scenario for mapping an arena with the lidar robot: the arena and route, the lidar, the
+wheel odometry's errors, the SLAM, the route follower, the plant and the viewer. Values live in
+``config/mapping_scenario.yaml``; units in comments."""
+
+import dataclasses as dc
+import math
+from pathlib import Path
+
+from pydrake.multibody.plant import MultibodyPlantConfig
+
+from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
+from drake_sim.systems.control.route_follower import (
+    RouteFollowerConfig,
+    check_route_follower_config,
+)
+from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig, check_config
+from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from drake_sim.systems.sensors.lidar import LidarConfig, check_lidar_config
+
+
+@dc.dataclass
+class MappingScenario:
+    """The lidar robot mapping an arena along a route (or driven by teleop)."""
+
+    arena: str = "arenas/room.yaml"  # Arena file; a relative path is from config/.
+    route: str = ""  # Route file (relative: from config/); "" for the arena's default route.
+    lidar: LidarConfig = dc.field(default_factory=LidarConfig)  # The TurtleBot3's LDS-01.
+    odometry: EncoderOdometryConfig = dc.field(default_factory=EncoderOdometryConfig)
+    slam: SlamConfig = dc.field(default_factory=SlamConfig)
+    route_follower: RouteFollowerConfig = dc.field(default_factory=RouteFollowerConfig)
+    drive_rate: float = 100.0  # Hz, the diff-drive controller's wheel loops (limits: the robot's).
+    plant: MultibodyPlantConfig = dc.field(
+        default_factory=lambda: MultibodyPlantConfig(
+            time_step=2e-3, contact_model="point", discrete_contact_approximation="lagged"
+        )
+    )
+    map_view_period: float = 1.0  # s between redraws of the map in Meshcat.
+    # s between the map's (and the scan's) drawings kept in a --record replay: each is a whole
+    # map, so a replay of a long run grows by megabytes per drawing.
+    record_map_period: float = 5.0
+    log_period: float = 0.05  # s between samples of the true pose (for the report).
+    # s simulated at most: the route's length / speed x duration_factor + duration_margin.
+    duration_factor: float = 2.0
+    duration_margin: float = 30.0
+    random_seed: int = 0  # Odometry errors and lidar noise.
+
+
+def check_mapping_scenario(scenario: MappingScenario, where: str = "scenario") -> MappingScenario:
+    """Returns ``scenario`` if valid; raises ``ConfigError`` naming ``where`` and the key."""
+    check_lidar_config(scenario.lidar, f"{where}: lidar")
+    check_config(scenario.odometry, where, prefix="odometry.")
+    scenario.slam.check(f"{where}: slam")
+    check_route_follower_config(scenario.route_follower, f"{where}: route_follower")
+    if not (math.isfinite(scenario.plant.time_step) and scenario.plant.time_step > 0):
+        raise ConfigError(f"{where}: 'plant.time_step' must be > 0 (a discrete plant)")
+    for key in (
+        "drive_rate",
+        "map_view_period",
+        "record_map_period",
+        "log_period",
+        "duration_factor",
+        "duration_margin",
+    ):
+        value = getattr(scenario, key)
+        if not (math.isfinite(value) and value > 0):
+            raise ConfigError(f"{where}: '{key}' must be finite and > 0, got {value!r}")
+    if scenario.random_seed < 0:
+        raise ConfigError(f"{where}: 'random_seed' must be >= 0, got {scenario.random_seed}")
+    return scenario
+
+
+def config_path(name: str) -> Path:
+    """A file named in a scenario: as given if absolute, else under ``config/``."""
+    path = Path(name)
+    return path if path.is_absolute() else config_dir() / path
+
+
+def default_scenario_file() -> Path:
+    """Returns ``config/mapping_scenario.yaml``."""
+    return config_dir() / "mapping_scenario.yaml"
+
+
+def load_mapping_scenario(filename, *, defaults=None) -> MappingScenario:
+    """Loads ``filename`` into a MappingScenario (unknown keys are errors; missing keys keep
+    ``defaults``, the schema's own when None) and checks it.
+
+    Raises:
+        ConfigError: naming the file and the key at fault.
+    """
+    text = read_text(filename, "scenario file")
+    scenario = load_typed(MappingScenario, data=text, defaults=defaults, where=str(filename))
+    return check_mapping_scenario(scenario, str(filename))

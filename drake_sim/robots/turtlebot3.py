@@ -1,0 +1,123 @@
+"""The TurtleBot3 Waffle model: render its xacro for a robot YAML, add it to a plant, and the
+names and numbers a diagram builder needs (frames, wheel joints, start pose, drive limits).
+
+See ``models/turtlebot3/turtlebot3.urdf.xacro`` for the frames. The plant's free body is
+``base_footprint`` (F, on the floor under the axle's midpoint); the robot's planar pose
+``(x, y, yaw)`` is F's.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import yaml
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+
+from drake_sim.base.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
+from drake_sim.robots.turtlebot3_params import Turtlebot3Params
+
+ROBOT_XACRO = "turtlebot3/turtlebot3.urdf.xacro"
+"""The robot's xacro, relative to ``models/``."""
+SOLID_MACROS = "ddrive/macros.xacro"
+"""The shared solid-link macros the xacro includes, relative to ``models/``."""
+
+BASE_FOOTPRINT = "base_footprint"
+"""The free body: on the floor under the axle's midpoint; the robot's planar pose is its."""
+BASE_LINK = "base_link"
+"""The chassis body, welded to ``base_footprint`` with its origin on the axle."""
+LEFT_WHEEL_JOINT = "left_wheel_joint"
+RIGHT_WHEEL_JOINT = "right_wheel_joint"
+WHEEL_JOINTS = (LEFT_WHEEL_JOINT, RIGHT_WHEEL_JOINT)
+"""In the order of the plant's actuation input: [left, right]."""
+WHEEL_LINKS = ("left_wheel", "right_wheel")
+CASTER_LINKS = ("left_caster", "right_caster")
+IMU_FRAME = "imu_link"
+CAMERA_FRAME = "camera_rgb_frame"
+"""The camera's optical centre; x along the optical axis (forward), y left, z up."""
+CAMERA_OPTICAL_FRAME = "camera_rgb_optical_frame"
+"""The camera's optical centre; z along the optical axis, x right, y down: Drake's camera
+frame C (``RgbdSensor``). Attach a camera here with X_PC = I."""
+LIDAR_FRAME = "base_scan"
+"""The lidar's scan centre, with F's axes, ``params.scan_height`` above the floor."""
+
+START_LIFT = 1e-3
+"""m: how far ``start_pose`` lifts the robot, so the first step does not start in contact."""
+
+
+def default_turtlebot3_file() -> Path:
+    """Returns ``config/turtlebot3.yaml``."""
+    return config_dir() / "turtlebot3.yaml"
+
+
+def _params_file(params: Turtlebot3Params) -> Path:
+    """The parameters, every optional key filled in, as a YAML file named by its hash."""
+    text = yaml.safe_dump(params.to_dict(), sort_keys=True)
+    name = f"turtlebot3-{hashlib.sha256(text.encode()).hexdigest()[:16]}.yaml"
+    path = cache_dir() / "robot_yaml" / name
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    return path
+
+
+def robot_urdf(params: Turtlebot3Params) -> Path:
+    """Renders the TurtleBot3's URDF for ``params`` (cached) and returns its path.
+
+    The parameters are written as YAML beside the cache and handed to the xacro, which reads
+    them with ``xacro.load_yaml``.
+    """
+    mappings = {
+        "robot_config": str(_params_file(params)),
+        # Named here so the cache key covers the shared macros too.
+        "solid_macros": str(models_dir() / SOLID_MACROS),
+    }
+    return render_xacro(models_dir() / ROBOT_XACRO, mappings)
+
+
+def add_turtlebot3(
+    plant: MultibodyPlant, params: Turtlebot3Params, *, name: str = "turtlebot3"
+) -> ModelInstanceIndex:
+    """Adds the TurtleBot3 to ``plant`` as a free body (``base_footprint``, not welded) and
+    returns its model instance.
+
+    Its two actuators are ``left_wheel_motor`` and ``right_wheel_motor``, in that order. The
+    plant needs a registered SceneGraph (the robot has visual and collision geometry).
+    """
+    parser = make_parser(plant)
+    parser.SetAutoRenaming(False)
+    urdf = robot_urdf(params).read_text()
+    (instance,) = parser.AddModelsFromString(
+        urdf.replace('<robot name="turtlebot3"', f'<robot name="{name}"', 1), "urdf"
+    )
+    return instance
+
+
+def start_pose(x: float, y: float, yaw: float) -> RigidTransform:
+    """X_WF: ``base_footprint`` standing on the floor at ``(x, y)`` (m) heading ``yaw``
+    (rad), lifted ``START_LIFT``; for ``plant.SetDefaultFloatingBaseBodyPose``."""
+    return RigidTransform(RollPitchYaw(0.0, 0.0, yaw), [x, y, START_LIFT])
+
+
+def wheel_state_selector(plant: MultibodyPlant, instance: ModelInstanceIndex) -> np.ndarray:
+    """The 4 x (nq + nv) matrix that picks ``[q_left, q_right, v_left, v_right]`` (rad,
+    rad/s) from the finalised plant's full state (for a ``MatrixGain`` on its state output)."""
+    joints = [plant.GetJointByName(name, instance) for name in WHEEL_JOINTS]
+    rows = [j.position_start() for j in joints]
+    rows += [plant.num_positions() + j.velocity_start() for j in joints]
+    return np.eye(plant.num_multibody_states())[rows]
+
+
+def drive_limits(params: Turtlebot3Params) -> dict[str, float]:
+    """The robot's ``cmd_vel`` limits (m/s, rad/s, m/s^2, rad/s^2) under the field names of
+    ``DiffDriveConfig``: ``dc.replace(DiffDriveConfig(), **drive_limits(params))``."""
+    limits = params.limits
+    return {
+        "max_linear_velocity": limits.max_linear_velocity,
+        "max_angular_velocity": limits.max_angular_velocity,
+        "max_linear_acceleration": limits.max_linear_acceleration,
+        "max_angular_acceleration": limits.max_angular_acceleration,
+    }

@@ -1,0 +1,254 @@
+"""A log-odds occupancy grid built from 2D laser scans, and how to score a map against the truth.
+
+``LogOddsGrid`` keeps l = log(p / (1 - p)) per cell (0: never seen). Inserting a scan adds
+l_hit = log(p_hit / (1 - p_hit)) to the cell of every beam's end point and l_miss (negative) to
+every cell the beam crossed before it, once per scan each (a cell both crossed and hit in one
+scan counts as hit, as in hector_slam's update markers); values are clamped so that a cell
+can change its mind after a few scans. Beams without a return (``inf``) clear the space up to
+``range_max``; NaN beams and beams shorter than ``range_min`` give no information.
+
+Ray tracing is vectorised over the whole scan: every beam is sampled at ``step`` (half a cell)
+from the sensor, the samples turned into cell indices at once and de-duplicated through a stamp
+array (no sort), so there is no Python loop per beam or per cell: a 360-beam, 3.5 m scan on a
+0.05 m grid costs about 0.5 ms here (``benchmarks/slam_benchmark.py``).
+
+``occupancy_iou`` and ``known_fraction`` compare a map with a ground-truth ``OccupancyMap``
+(different origins and resolutions allowed: cells are matched by their centres).
+"""
+
+import math
+
+import numpy as np
+from scipy import ndimage
+
+from drake_sim.base.map_files import FREE, OCCUPIED, UNKNOWN, OccupancyMap
+
+
+def log_odds(p: float) -> float:
+    """log(p / (1 - p)) of a probability in (0, 1)."""
+    return math.log(p / (1.0 - p))
+
+
+class LogOddsGrid:
+    """A square-celled log-odds occupancy grid, axis-aligned with the world.
+
+    Args:
+        resolution: cell size, m.
+        size: (width, height) of the grid, m (rounded up to whole cells).
+        origin: (x, y) of the lower-left corner of cell [0, 0] in the world, m. Row index grows
+            with y, column index with x, as in ``OccupancyMap``.
+        p_hit: probability a cell holding a beam's end point is occupied, in (0.5, 1).
+        p_miss: probability a cell a beam crossed is occupied, in (0, 0.5).
+        clamp: log-odds are kept in [-clamp, clamp].
+    """
+
+    def __init__(
+        self,
+        *,
+        resolution: float,
+        size: tuple[float, float],
+        origin: tuple[float, float],
+        p_hit: float = 0.7,
+        p_miss: float = 0.4,
+        clamp: float = 4.0,
+    ):
+        if not resolution > 0:
+            raise ValueError(f"resolution must be positive, got {resolution}")
+        if not (0.5 < p_hit < 1 and 0 < p_miss < 0.5 and clamp > 0):
+            raise ValueError(
+                f"need 0.5 < p_hit < 1, 0 < p_miss < 0.5, clamp > 0 ({p_hit}, {p_miss})"
+            )
+        self.resolution = float(resolution)
+        self.origin = (float(origin[0]), float(origin[1]))
+        cols, rows = (max(1, math.ceil(s / resolution - 1e-9)) for s in size)
+        self.log_odds = np.zeros((rows, cols), dtype=np.float32)
+        self.l_hit, self.l_miss, self.clamp = log_odds(p_hit), log_odds(p_miss), float(clamp)
+        self._stamp = self._is_hit = None  # Scratch arrays (see _unique), made when needed.
+        # Rows and columns of the cells touched so far: [row_min, row_max, col_min, col_max].
+        self.known_box = None
+        self.version = 0  # Incremented by every insert_scan.
+
+    def __getstate__(self):
+        # Copies (a Drake abstract state is copied at every update) leave the scratch behind.
+        return {**self.__dict__, "_stamp": None, "_is_hit": None}
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, cols)."""
+        return self.log_odds.shape
+
+    def probability(self) -> np.ndarray:
+        """Occupancy probability of every cell, (rows, cols); 0.5 for cells never seen."""
+        return 1.0 / (1.0 + np.exp(-self.log_odds))
+
+    def insert_scan(
+        self,
+        sensor_pose,
+        ranges,
+        angles,
+        range_max: float,
+        *,
+        range_min: float = 0.0,
+        max_free_range: float | None = None,
+        mask=None,
+    ) -> None:
+        """Adds one scan taken from ``sensor_pose`` (x, y, yaw in the world, m, m, rad).
+
+        Args:
+            ranges: (n,) m along each beam; ``inf`` = no return within ``range_max``.
+            angles: (n,) beam angles in the sensor frame, rad.
+            range_max: m; returns at or beyond it count as no return.
+            range_min: m; shorter (finite) returns are ignored.
+            max_free_range: m; beams clear space up to this distance at most (default
+                ``range_max``).
+            mask: optional (n,) booleans, False beams are ignored.
+        """
+        ranges = np.asarray(ranges, dtype=float)
+        angles = np.asarray(angles, dtype=float)
+        use = ~np.isnan(ranges) & (ranges >= range_min)
+        if mask is not None:
+            use &= np.asarray(mask, dtype=bool)
+        ranges, angles = ranges[use], angles[use]
+        hit = ranges < range_max
+        free_limit = range_max if max_free_range is None else min(max_free_range, range_max)
+        # Free space stops half a cell short of a hit, so the hit cell itself is not cleared.
+        free_length = np.where(hit, ranges - 0.5 * self.resolution, free_limit)
+        free_length = np.minimum(free_length, free_limit)
+        x, y, yaw = (float(v) for v in sensor_pose)
+        c, s = np.cos(angles + yaw), np.sin(angles + yaw)
+        step = 0.5 * self.resolution
+        count = int(math.ceil(max(free_length.max(initial=0.0), 0.0) / step)) + 1
+        t = np.arange(count) * step
+        inside = t[None, :] < free_length[:, None]
+        px = x + c[:, None] * t[None, :]
+        py = y + s[:, None] * t[None, :]
+        if self._stamp is None:
+            self._stamp = np.zeros(self.log_odds.size, dtype=np.int32)
+            self._is_hit = np.zeros(self.log_odds.size, dtype=bool)
+        free_cells = self._unique(self._flat_cells(px[inside], py[inside]))
+        hit_cells = self._unique(
+            self._flat_cells(x + c[hit] * ranges[hit], y + s[hit] * ranges[hit])
+        )
+        is_hit = self._is_hit
+        is_hit[hit_cells] = True
+        free_cells = free_cells[~is_hit[free_cells]]
+        is_hit[hit_cells] = False
+        flat = self.log_odds.reshape(-1)
+        flat[free_cells] = np.maximum(flat[free_cells] + self.l_miss, -self.clamp)
+        flat[hit_cells] = np.minimum(flat[hit_cells] + self.l_hit, self.clamp)
+        self._grow_box(np.concatenate([free_cells, hit_cells]))
+        self.version += 1
+
+    def to_occupancy_map(
+        self,
+        *,
+        occupied_thresh: float = 0.5,
+        free_thresh: float = 0.5,
+        crop: bool = True,
+        margin: int = 2,
+    ) -> OccupancyMap:
+        """The grid as a trinary ``OccupancyMap``: 100 where p > occupied_thresh, 0 where
+        p < free_thresh, -1 otherwise and where never seen (the defaults are hector_slam's:
+        the sign of the log-odds). ``crop`` keeps the seen cells plus ``margin`` cells."""
+        p = self.probability()
+        cells = np.full(self.shape, UNKNOWN, dtype=np.int8)
+        seen = self.log_odds != 0
+        cells[seen & (p < free_thresh)] = FREE
+        cells[seen & (p > occupied_thresh)] = OCCUPIED
+        r0, c0 = 0, 0
+        if crop and self.known_box is not None:
+            rmin, rmax, cmin, cmax = self.known_box
+            r0, c0 = max(rmin - margin, 0), max(cmin - margin, 0)
+            r1, c1 = min(rmax + margin + 1, self.shape[0]), min(cmax + margin + 1, self.shape[1])
+            cells = cells[r0:r1, c0:c1]
+        # Rounded to 1e-9 m so that map files say -3.15, not -3.1499999999999986.
+        x0 = round(self.origin[0] + c0 * self.resolution, 9)
+        y0 = round(self.origin[1] + r0 * self.resolution, 9)
+        return OccupancyMap(cells, self.resolution, (x0, y0, 0.0))
+
+    def _flat_cells(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Flat indices of the cells holding the points; points off the grid are dropped."""
+        rows, cols = self.shape
+        j = np.floor((xs - self.origin[0]) / self.resolution).astype(np.int64)
+        i = np.floor((ys - self.origin[1]) / self.resolution).astype(np.int64)
+        ok = (i >= 0) & (i < rows) & (j >= 0) & (j < cols)
+        return i[ok] * cols + j[ok]
+
+    def _unique(self, flat: np.ndarray) -> np.ndarray:
+        """The distinct values of ``flat`` in O(n): each cell keeps the last index written to
+        it, and exactly one occurrence of each cell finds its own index there."""
+        index = np.arange(flat.size, dtype=np.int32)
+        self._stamp[flat] = index
+        return flat[self._stamp[flat] == index]
+
+    def _grow_box(self, flat: np.ndarray) -> None:
+        if flat.size == 0:
+            return
+        rows, cols = np.divmod(flat, self.shape[1])
+        box = [rows.min(), rows.max(), cols.min(), cols.max()]
+        if self.known_box is not None:
+            old = self.known_box
+            box = [
+                min(box[0], old[0]),
+                max(box[1], old[1]),
+                min(box[2], old[2]),
+                max(box[3], old[3]),
+            ]
+        self.known_box = [int(v) for v in box]
+
+
+def observable(truth: OccupancyMap) -> tuple[np.ndarray, np.ndarray]:
+    """Masks (free, surface) of the truth's cells a lidar can observe: its free cells, and its
+    occupied cells that touch a free cell (8-neighbourhood), the surfaces of walls and
+    obstacles. The inside of an obstacle is never seen by a scan."""
+    free = truth.free()
+    occupied = truth.occupied()
+    near_free = ndimage.binary_dilation(free, structure=np.ones((3, 3), bool))
+    return free, occupied & near_free
+
+
+def occupancy_iou(
+    occupancy_map: OccupancyMap, truth: OccupancyMap, tolerance_cells: int = 1
+) -> float:
+    """Intersection over union of the map's occupied cells A and the truth's occupied surface
+    cells B (see ``observable``), with a tolerance: (|A near B| + |B near A|) / (|A| + |B|),
+    where "near" means within ``tolerance_cells`` cells of the truth's resolution (Chebyshev
+    distance between cell centres). 1 when every wall is mapped where it is and nothing else
+    is; an empty map scores 0."""
+    a_mask = occupancy_map.occupied()
+    _, b_mask = observable(truth)
+    if not a_mask.any() or not b_mask.any():
+        return 0.0
+    tolerance = tolerance_cells * truth.resolution
+    a_xy = _centres_of(occupancy_map, a_mask)
+    b_xy = _centres_of(truth, b_mask)
+    a_near_b = _near(truth, b_mask, a_xy, tolerance)
+    b_near_a = _near(occupancy_map, a_mask, b_xy, tolerance)
+    return float((a_near_b.sum() + b_near_a.sum()) / (len(a_xy) + len(b_xy)))
+
+
+def known_fraction(occupancy_map: OccupancyMap, truth: OccupancyMap) -> float:
+    """Fraction of the truth's observable cells (free cells and occupied surface cells, see
+    ``observable``) whose centres fall in a known (free or occupied) cell of the map."""
+    free, surface = observable(truth)
+    target = free | surface
+    if not target.any():
+        return 0.0
+    values = occupancy_map.value_at(_centres_of(truth, target))
+    return float(np.mean(values >= 0))
+
+
+def _centres_of(grid: OccupancyMap, mask: np.ndarray) -> np.ndarray:
+    xs, ys = grid.centres()
+    return np.stack([xs[mask], ys[mask]], -1)
+
+
+def _near(grid: OccupancyMap, mask: np.ndarray, xy: np.ndarray, tolerance: float) -> np.ndarray:
+    """Which points lie within ``tolerance`` m (per axis, about) of a ``mask`` cell of ``grid``."""
+    radius = max(0, int(math.floor(tolerance / grid.resolution + 0.5)))
+    grown = ndimage.binary_dilation(mask, np.ones((2 * radius + 1,) * 2, bool)) if radius else mask
+    rows, cols = grid.cell_of(xy)
+    inside = grid.inside(rows, cols)
+    near = np.zeros(len(xy), dtype=bool)
+    near[inside] = grown[rows[inside], cols[inside]]
+    return near

@@ -1,0 +1,176 @@
+"""drake_sim.systems.estimation.scan_matching_slam: SLAM in synthetic rooms, drifting odometry."""
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+
+import drake_sim.systems.estimation.scan_matching_slam as mut
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.map_files import load_map
+from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
+from tests import slam_helpers as helpers
+
+X_BASE_SENSOR = (-0.064, 0.0, 0.0)  # The TurtleBot3 Waffle's LDS sits behind the axle.
+
+
+def run(world, route, start, *, seed, config=None, **odometry):
+    """Drives ``route``; returns (slam, truth poses, odometry poses)."""
+    truth = helpers.drive(route, start)
+    odom = helpers.drifting_odometry(truth, seed=seed, **odometry)
+    sensor = np.array([helpers.compose(pose, X_BASE_SENSOR) for pose in truth])
+    ranges, angles = helpers.lidar_scans(world, sensor, seed=seed + 100)
+    dut = mut.ScanMatchingSlam(config, truth[0], X_BASE_SENSOR)
+    for k, (scan, pose) in enumerate(zip(ranges, odom, strict=True)):
+        dut.update(scan, angles, pose, range_max=3.5, range_min=0.12, time=0.2 * k)
+    return dut, truth, odom
+
+
+@pytest.fixture(scope="module", params=[7, 12])
+def room_run(request):
+    return run(helpers.room(), helpers.ROOM_ROUTE, helpers.ROOM_START, seed=request.param)
+
+
+def test_slam_corrects_the_drift_of_odometry(room_run):
+    dut, truth, odom = room_run
+    trajectory = dut.trajectory
+    assert trajectory.shape == truth.shape and dut.scans == len(truth)
+    error = np.hypot(*(trajectory[:, :2] - truth[:, :2]).T)
+    rmse = math.sqrt(np.mean(error**2))
+    odometry_final = math.hypot(*(odom[-1, :2] - truth[-1, :2]))
+    assert odometry_final > 0.15  # the odometry did drift (2 % and 0.5 deg/m over ~30 m)
+    assert rmse <= 0.05 and 3 * rmse <= odometry_final, (rmse, odometry_final)
+    yaw_error = mut.wrap_angle(trajectory[-1, 2] - truth[-1, 2])
+    assert abs(math.degrees(yaw_error)) < 1.0
+    assert dut.rejected <= 0.02 * dut.scans and dut.degenerate <= 0.02 * dut.scans
+    np.testing.assert_allclose(dut.times[:3], [0.0, 0.2, 0.4])
+
+
+def test_the_map_matches_the_room(room_run):
+    dut = room_run[0]
+    truth = helpers.room().truth(0.05)
+    result = dut.map()
+    assert result.resolution == 0.05
+    assert occupancy_iou(result, truth) >= 0.9
+    assert known_fraction(result, truth) >= 0.95
+    assert result.width_m < 10.0 and result.height_m < 8.0  # cropped to what was seen
+
+
+def test_saved_map_loads_back(room_run, tmp_path):
+    dut = room_run[0]
+    pgm, yml = dut.save(tmp_path / "room")
+    assert pgm.read_bytes().startswith(b"P5\n")
+    loaded = load_map(yml)
+    np.testing.assert_array_equal(loaded.cells, dut.map().cells)
+    assert loaded.origin == dut.map().origin
+
+
+def test_a_featureless_corridor_falls_back_on_odometry_along_it():
+    world = helpers.World(15.0, 0.6)  # 30 m long, 1.2 m wide: no end within range
+    route = [(4.0, 0.0)]
+    dut, truth, odom = run(world, route, (-4.0, 0.0, 0.0), seed=3, scale=0.03, yaw_deg_per_m=1.0)
+    estimate = dut.trajectory
+    assert np.all(np.isfinite(estimate))
+    # Across the corridor and in yaw the walls hold the estimate...
+    assert np.abs(estimate[:, 1] - truth[:, 1]).max() < 0.03
+    assert np.abs(np.degrees(mut.wrap_angle(estimate[:, 2] - truth[:, 2]))).max() < 0.6
+    # ...while along it, it follows the odometry's distance (3 % too long) without exploding.
+    along = estimate[-1, 0] - estimate[0, 0]
+    odometry_along = math.hypot(*(odom[-1, :2] - odom[0, :2]))
+    assert along == pytest.approx(odometry_along, abs=0.1)
+    assert abs(odom[-1, 1] - truth[-1, 1]) > 0.1  # the odometry's own heading drifted away
+    assert dut.degenerate >= 0.9 * dut.scans
+
+
+def test_a_match_beyond_the_gate_keeps_the_prediction():
+    world = helpers.room()
+    pose = np.array([-2.0, -2.0, 0.3])
+    ranges, angles = helpers.lidar_scans(world, [pose, pose], seed=5)
+    gated = dc.replace(mut.SlamConfig(), max_correction=0.001)
+    for config, expect_prediction in [(gated, True), (mut.SlamConfig(), False)]:
+        dut = mut.ScanMatchingSlam(config, pose)
+        dut.update(ranges[0], angles, (0.0, 0.0, 0.0), range_max=3.5)
+        # The odometry claims a 5 cm move sideways that did not happen.
+        result = dut.update(ranges[1], angles, (0.0, 0.05, 0.0), range_max=3.5)
+        prediction = mut.compose(pose, (0.0, 0.05, 0.0))
+        if expect_prediction:
+            np.testing.assert_allclose(result, prediction)
+            assert dut.rejected == 1
+        else:
+            assert math.hypot(*(result[:2] - pose[:2])) < 0.01 and dut.rejected == 0
+        assert dut.last_match is not None
+
+
+def test_scans_with_too_few_returns_are_not_matched():
+    dut = mut.ScanMatchingSlam(initial_pose=(1.0, 2.0, 0.5))
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    nothing = np.full(360, np.inf)
+    dut.update(nothing, angles, (0.0, 0.0, 0.0), range_max=3.5)
+    pose = dut.update(nothing, angles, (0.1, 0.0, 0.0), range_max=3.5)
+    np.testing.assert_allclose(pose, mut.compose((1.0, 2.0, 0.5), (0.1, 0.0, 0.0)))
+    assert dut.rejected == 1 and dut.last_match is None
+    assert (dut.map().cells == 0).sum() > 1000  # no return: free up to range_max
+
+
+def test_pose_algebra():
+    a, b = np.array([1.0, 2.0, 0.5]), np.array([0.3, -0.2, 2.9])
+    np.testing.assert_allclose(mut.relative(a, mut.compose(a, b)), b, atol=1e-12)
+    np.testing.assert_allclose(mut.compose(a, mut.relative(a, b)), b, atol=1e-12)
+
+
+def test_map_update_thresholds():
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    ranges = helpers.World(2.0, 2.0).cast((0.0, 0.0, 0.0), angles)
+    dut = mut.ScanMatchingSlam(dc.replace(mut.SlamConfig(), initial_map_updates=1))
+    for _ in range(5):  # standing still: only the first scan goes into the map
+        dut.update(ranges, angles, (0.0, 0.0, 0.0), range_max=3.5)
+    assert dut.map_updates == 1
+
+
+def test_defaults_and_config_file(tmp_path):
+    config = mut.SlamConfig()
+    config.check()
+    assert (config.resolution, config.levels, config.map_size) == (0.05, 3, 30.0)
+    path = tmp_path / "slam.yaml"
+    path.write_text("map_update_distance: 0.3\niterations: [5, 4, 3, 2]\n")
+    loaded = mut.load_slam_config(path)
+    assert loaded.map_update_distance == 0.3 and loaded.iterations == [5, 4, 3, 2]
+    assert loaded.p_hit == config.p_hit
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("resolution: -0.05", "'resolution' must be positive"),
+        ("resolution: .nan", "'resolution' must be finite"),
+        ("p_hit: 0.4", "'p_hit' must be in"),
+        ("p_miss: 0.7", "'p_miss' must be in"),
+        ("levels: 3\niterations: [4, 4]", "'iterations' needs 4 counts"),
+        ("levels: 0", "'levels' must be at least 1"),
+        ("prior_weight: [1.0, 2.0]", "'prior_weight' needs 3"),
+        ("map_update_angle_deg: -1", "'map_update_angle_deg' must not be negative"),
+        ("resolutoin: 0.05", "unknown key 'resolutoin'"),
+    ],
+)
+def test_bad_config_is_one_line_naming_the_key(tmp_path, text, match):
+    path = tmp_path / "slam.yaml"
+    path.write_text(text + "\n")
+    with pytest.raises(ConfigError, match=match) as info:
+        mut.load_slam_config(path)
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
+def test_copies_are_independent():
+    import copy
+
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    ranges = helpers.World(2.0, 2.0).cast((0.0, 0.0, 0.0), angles)
+    dut = mut.ScanMatchingSlam()
+    dut.update(ranges, angles, (0.0, 0.0, 0.0), range_max=3.5)
+    twin = copy.deepcopy(dut)  # as a Drake abstract state is copied
+    shifted = helpers.World(2.0, 2.0).cast((0.5, 0.0, 0.0), angles)
+    twin.update(shifted, angles, (0.5, 0.0, 0.0), range_max=3.5)
+    assert twin.scans == 2 and dut.scans == 1
+    assert not np.array_equal(twin.grids[0].log_odds, dut.grids[0].log_odds)
+    np.testing.assert_allclose(twin.pose, (0.5, 0.0, 0.0), atol=0.03)

@@ -1,0 +1,157 @@
+"""``python -m drake_sim.mapping``: options, map files, JSON report and exit codes (DESIGN.md,
+arena, route and goals files)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+import drake_sim.mapping as mut
+from drake_sim.base import cli
+from drake_sim.base.map_files import load_map
+from drake_sim.base.resources import config_dir
+from tests.cli_helpers import assert_bad_input
+
+REPORT_KEYS = {
+    "map_iou",
+    "known_fraction",
+    "pose_rmse_m",
+    "final_pose_error_m",
+    "final_yaw_error_deg",
+    "odometry_final_error_m",
+    "scans",
+    "sim_time_s",
+    "wall_time_s",
+    "real_time_factor",
+}
+
+SHORT_ROUTE = "waypoints: [[-0.6, -1.8], [-0.6, -1.5]]\n"  # In the room, from its start.
+
+
+def _main(*args):
+    return cli.run(mut.main, ["--headless", *args])
+
+
+def test_a_short_route_maps_saves_and_reports(tmp_path, capsys):
+    route = tmp_path / "route.yaml"
+    route.write_text(SHORT_ROUTE)
+    report_file = tmp_path / "report.json"
+    out = tmp_path / "maps" / "room"
+    code = _main(
+        "--route", str(route), "--out", str(out), "--report", str(report_file), "--seed", "2"
+    )
+    assert code == 0, capsys.readouterr().err
+    report = json.loads(report_file.read_text())
+    assert report.keys() >= REPORT_KEYS
+    assert report["end"] == "route_done" and report["seed"] == 2
+    assert type(report["scans"]) is int and report["scans"] > 20
+    assert report["pose_rmse_m"] < 0.05
+    assert 0.2 < report["known_fraction"] < 0.95  # a short route sees part of the room
+    assert report["map_files"] == [str(out) + ".pgm", str(out) + ".yaml"]
+    saved = load_map(str(out) + ".yaml")
+    assert saved.resolution == pytest.approx(0.05)
+    assert saved.occupied().sum() > 50 and saved.free().sum() > 500
+    assert "map IoU" in capsys.readouterr().out
+
+
+def _run(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "drake_sim.mapping", "--headless", *args],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=cwd,
+    )
+
+
+def _arena_file(tmp_path, edit):
+    data = yaml.safe_load((config_dir() / "arenas" / "room.yaml").read_text())
+    edit(data)
+    path = tmp_path / "arena.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def _obstacle_outside(data):
+    data["obstacles"].append({"box": {"size": [0.4, 0.4, 0.3], "position": [9.0, 0.0]}})
+
+
+def _negative_size(data):
+    data["size"] = [-6.0, 5.0]
+
+
+def _unknown_key(data):
+    data["colour"] = "red"
+
+
+def _nan(data):
+    data["wall"]["height"] = float("nan")
+
+
+def _start_in_obstacle(data):
+    box = next(o["box"] for o in data["obstacles"] if "box" in o)
+    data["start"] = {"x": box["position"][0], "y": box["position"][1], "yaw": 0}
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (_obstacle_outside, "obstacles"),
+        (_negative_size, "size"),
+        (_unknown_key, "colour"),
+        (_nan, "wall.height"),
+        (_start_in_obstacle, "start"),
+    ],
+)
+def test_bad_arenas_are_one_line_and_exit_2(tmp_path, edit, needle):
+    assert_bad_input(_run("--arena", str(_arena_file(tmp_path, edit))), needle)
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--arena", "missing.yaml"], "missing.yaml"),
+        (["--route", "missing.yaml"], "missing.yaml"),
+        (["--teleop"], "--teleop"),
+        (["--set", "lidar.range_max=0.05"], "range"),
+        (["--set", "slam.resolution=-1"], "resolution"),
+        (["--seed", "-1"], "--seed"),
+    ],
+)
+def test_bad_options_are_one_line_and_exit_2(args, needle):
+    assert_bad_input(_run(*args), needle)
+
+
+def test_a_route_through_a_wall_is_bad_input(tmp_path):
+    route = tmp_path / "route.yaml"
+    route.write_text("waypoints: [[-1.2, -1.5], [9.0, 0.0]]\n")
+    assert_bad_input(_run("--route", str(route)), "waypoints[1]")
+
+
+def test_a_map_path_under_a_file_is_bad_input(tmp_path):
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("not a folder")
+    assert_bad_input(_run("--out", str(blocker / "sub" / "map")), "map")
+
+
+def test_a_route_not_completed_exits_with_1(tmp_path):
+    route = tmp_path / "route.yaml"
+    route.write_text(SHORT_ROUTE)
+    report = tmp_path / "report.json"
+    result = _run(
+        "--route",
+        str(route),
+        "--duration",
+        "2",
+        "--out",
+        str(tmp_path / "m"),
+        "--report",
+        str(report),
+    )
+    assert result.returncode == 1, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "not completed" in lines[0]
+    assert json.loads(report.read_text())["end"] == "duration"
+    assert (tmp_path / "m.pgm").is_file()  # the map so far is still saved
