@@ -45,6 +45,7 @@ LAYERS = (
         ),
     ),
     ("planning: execution, interface", ("planning.execution", "planning.interface")),
+    ("planning: mobile navigation (costmaps, planners, navigator)", ("planning.mobile",)),
     ("planning: tasks and the public API", ("planning.task", "planning")),
     ("diagrams", ("diagrams",)),
     (
@@ -56,6 +57,8 @@ LAYERS = (
             "drake_sim.walle_run",
             "drake_sim.mapping",
             "drake_sim.mapping_run",
+            "drake_sim.navigate",
+            "drake_sim.navigation_run",
             "drake_sim.view",
             "drake_sim.pickplace",
             "drake_sim.tools",

@@ -51,11 +51,11 @@ class EncoderOdometryConfig:
     ticks_per_revolution: int = 4096  # Encoder resolution (Dynamixel XL430: 4096).
     # Systematic calibration errors, relative; their signs are drawn once per run.
     wheel_radius_error: float = 0.01  # Common to both wheels (scales every distance).
-    wheel_radius_difference: float = 0.0008  # Right minus left radius (a straight line curves).
+    wheel_radius_difference: float = 0.003  # Right minus left radius (a straight line curves).
     wheel_separation_error: float = 0.005  # Scales every turn.
     # Random slip: the standard deviation of a wheel's distance error after it rolled 1 m,
     # m / sqrt(m); it grows with the square root of the distance.
-    slip_noise: float = 0.001
+    slip_noise: float = 0.005
 
     @staticmethod
     def exact(rate: float = 50.0) -> "EncoderOdometryConfig":

@@ -210,12 +210,13 @@ def observable(truth: OccupancyMap) -> tuple[np.ndarray, np.ndarray]:
 def occupancy_iou(
     occupancy_map: OccupancyMap, truth: OccupancyMap, tolerance_cells: int = 1
 ) -> float:
-    """Intersection over union of the map's occupied cells A and the truth's occupied surface
-    cells B (see ``observable``), with a tolerance: (|A near B| + |B near A|) / (|A| + |B|),
+    """Intersection over union of the map's occupied surface cells A and the truth's B (an
+    occupied cell with a free neighbour, see ``observable``: the inside of a solid is never
+    seen by a scan, in either map), with a tolerance: (|A near B| + |B near A|) / (|A| + |B|),
     where "near" means within ``tolerance_cells`` cells of the truth's resolution (Chebyshev
     distance between cell centres). 1 when every wall is mapped where it is and nothing else
-    is; an empty map scores 0."""
-    a_mask = occupancy_map.occupied()
+    is (the truth scores 1 against itself); an empty map scores 0."""
+    _, a_mask = observable(occupancy_map)
     _, b_mask = observable(truth)
     if not a_mask.any() or not b_mask.any():
         return 0.0

@@ -1,1 +1,2 @@
-"""LeafSystems that talk to Meshcat: keyboard teleop and trails drawn behind the robot."""
+"""LeafSystems that talk to Meshcat: keyboard teleop, trails drawn behind the robot, and the
+mapping view (the map, the scan, the estimated pose)."""

@@ -1,0 +1,151 @@
+"""Benchmark of the lidar robot's navigation: ``python benchmarks/navigation_benchmark.py``.
+
+The whole stack (physics, lidar, wheel odometry, AMCL, costmaps, A*, DWA), headless, with the
+default robot and scenario (``config/navigation_scenario.yaml``), on each shipped arena's
+ground-truth map (what a perfect mapping run saves; ``--map-dir`` takes saved maps named
+``<arena>.yaml`` instead):
+
+* the real-time factor of the room's goals (``config/goals/room.yaml``), ``--runs`` times, and
+  the median (target >= 2);
+* per arena, ``--goals`` random goals (seeded; at least 0.4 m from anything): reached, the
+  largest position and heading errors against the truth, collisions, the smallest clearance,
+  the worst time over path length / top speed (target <= 2.5), the real-time factor;
+* AMCL alone: the median cost of one filter update with 2000 particles (target < 5 ms).
+
+Not a test: speeds depend on the machine.
+"""
+
+import argparse
+import dataclasses as dc
+import math
+import os
+import platform
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
+from drake_sim.base.map_files import load_map, save_map
+from drake_sim.navigation_run import NavigationRun
+from drake_sim.robots.turtlebot3 import default_turtlebot3_file
+from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.systems.estimation.particle_filter import ParticleFilter
+from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
+from drake_sim.worlds.footprints import cast_rays, clearance
+from drake_sim.worlds.route import default_goals_file, load_goals
+
+AMCL_UPDATES = 100
+"""Filter updates timed for AMCL's cost."""
+
+
+def random_goals(arena, count: int, seed: int) -> list[np.ndarray]:
+    """``count`` goals ``[x, y, yaw]`` in the arena, at least 0.4 m from any wall or obstacle."""
+    footprints = arena_footprints(arena)
+    rng = np.random.default_rng(seed)
+    half = 0.5 * np.array(arena.size)
+    goals = []
+    while len(goals) < count:
+        xy = rng.uniform(-half, half)
+        if clearance(footprints, xy[None])[0] >= 0.4:
+            goals.append(np.array([*xy, rng.uniform(-math.pi, math.pi)]))
+    return goals
+
+
+def run_goals(scenario, robot, arena, occupancy_map, goals, seed=0):
+    run = NavigationRun(
+        scenario, robot, arena, occupancy_map, start=arena.start_pose(), goals=goals, seed=seed
+    )
+    run.run(run.default_duration())
+    return run, run.report()
+
+
+def amcl_cost_ms(scenario, occupancy_map, arena, scan_config) -> float:
+    """Median ms of one ``ParticleFilter.update`` with 2000 particles, scans ray-cast from the
+    arena's start while the odometry moves on by 0.1 m each time."""
+    config = dc.replace(scenario.amcl, min_particles=2000, max_particles=2000)
+    pf = ParticleFilter(occupancy_map, config, seed=0)
+    start = np.array(arena.start_pose())
+    pf.set_pose(start, np.diag([0.01, 0.01, 0.01]))
+    angles = -math.pi + 2 * math.pi * np.arange(scan_config.samples) / scan_config.samples
+    ranges = cast_rays(arena_footprints(arena), start[None, :2], angles + start[2], 3.5)[0]
+    times = []
+    for k in range(AMCL_UPDATES + 1):
+        odom = start + [0.1 * k, 0.0, 0.0]
+        t0 = time.perf_counter()
+        pf.update(odom, ranges, angles, range_max=scan_config.range_max)
+        if k:  # the first only sets the odometry's reference
+            times.append(time.perf_counter() - t0)
+    return 1000 * statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--runs", type=int, default=3, help="timed runs of the room's goals")
+    parser.add_argument("--goals", type=int, default=10, help="random goals per arena")
+    parser.add_argument("--map-dir", type=Path, help="saved maps <arena>.yaml (default: truth)")
+    args = parser.parse_args()
+    scenario = load_navigation_scenario(default_scenario_file())
+    robot = load_turtlebot3_params(default_turtlebot3_file())
+    top = scenario.navigator.controller.max_vel_x
+    maps = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for path in shipped_arenas():
+            arena = load_arena(path)
+            if args.map_dir is not None:
+                maps[path.stem] = load_map(args.map_dir / f"{path.stem}.yaml")
+            else:
+                truth = arena_grid(arena, 0.05, height=robot.scan_height)
+                maps[path.stem] = load_map(save_map(truth, Path(tmp) / path.stem)[1])
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
+    print(
+        f"maps: {'saved, ' + str(args.map_dir) if args.map_dir else 'ground truth'}; "
+        f"top speed {top:g} m/s; AMCL {scenario.amcl.min_particles}-"
+        f"{scenario.amcl.max_particles} particles"
+    )
+    room_file = next(p for p in shipped_arenas() if p.stem == "room")
+    room = load_arena(room_file)
+    room_goals = [
+        np.array([g.x, g.y, math.radians(g.yaw)])
+        for g in load_goals(default_goals_file(room_file), room)
+    ]
+    factors = []
+    for index in range(args.runs):
+        _, report = run_goals(scenario, robot, room, maps["room"], room_goals, seed=index)
+        factors.append(report.real_time_factor)
+        print(
+            f"  room goals run {index + 1}: {report.sim_time_s:.1f} s simulated in "
+            f"{report.wall_time_s:.1f} s: {report.real_time_factor:.2f}x, reached "
+            f"{sum(g.reached for g in report.goals)}/{len(room_goals)}",
+            flush=True,
+        )
+    print(f"  median real-time factor: {statistics.median(factors):.2f}x (target >= 2)")
+    print(f"{args.goals} random goals per arena (seed 7):")
+    print(
+        "arena      reached  max_err_m  max_yaw_deg  collisions  min_clear_m  worst_t/(L/v)   rtf"
+    )
+    for path in shipped_arenas():
+        arena = load_arena(path)
+        goals = random_goals(arena, args.goals, seed=7)
+        _, r = run_goals(scenario, robot, arena, maps[path.stem], goals)
+        reached = [g for g in r.goals if g.reached]
+        worst = max(
+            (g.time_s / (g.path_length_m / top) for g in reached if g.path_length_m > 0),
+            default=math.nan,
+        )
+        print(
+            f"{path.stem:<10} {len(reached):>3}/{len(goals):<3} "
+            f"{max((g.position_error_m for g in reached), default=math.nan):10.3f} "
+            f"{max((g.yaw_error_deg for g in reached), default=math.nan):12.2f} "
+            f"{r.collisions:>11} {r.min_clearance_m:12.3f} {worst:14.2f} "
+            f"{r.real_time_factor:6.2f}",
+            flush=True,
+        )
+    cost = amcl_cost_ms(scenario, maps["room"], room, scenario.lidar)
+    print(f"AMCL update with 2000 particles: {cost:.2f} ms median (target < 5)")
+
+
+if __name__ == "__main__":
+    main()

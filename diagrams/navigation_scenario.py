@@ -1,0 +1,116 @@
+"""Typed scenario for navigating the lidar robot on a saved map: the arena it really drives in
+(with obstacles the map does not have), the lidar, the odometry's errors, AMCL, the navigator
+(costmaps, global and local planners, recoveries), the plant and the run's limits. Values live
+in ``config/navigation_scenario.yaml``; units in comments."""
+
+import dataclasses as dc
+import math
+from pathlib import Path
+
+from pydrake.multibody.plant import MultibodyPlantConfig
+
+from diagrams.mapping_scenario import config_path
+from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
+from drake_sim.systems.estimation.amcl import (
+    AmclConfig,
+    check_amcl_config,
+    default_amcl_config_file,
+    load_amcl_config,
+)
+from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig, check_config
+from drake_sim.systems.sensors.lidar import LidarConfig, check_lidar_config
+from drake_sim.worlds.arena import Arena, BoxSpec, CylinderSpec, ObstacleSpec, check_arena
+from planning.mobile.navigator import NavigatorConfig, check_navigator_config
+
+__all__ = ["NavigationScenario", "config_path", "load_navigation_scenario"]
+
+
+@dc.dataclass
+class ExtraObstacle:
+    """An obstacle put in the world after mapping: exactly one of ``box`` and ``cylinder``, in
+    the arena file's format."""
+
+    box: BoxSpec | None = None
+    cylinder: CylinderSpec | None = None
+    name: str = ""  # Optional; default "extra_<index>".
+
+
+@dc.dataclass
+class NavigationScenario:
+    """The lidar robot localising on a saved map and driving to goals."""
+
+    arena: str = "arenas/room.yaml"  # The world it drives in; a relative path is from config/.
+    # Obstacles added to the world after mapping (arena obstacle entries): the robot's
+    # obstacle layer sees them, its map does not.
+    extra_obstacles: list[ExtraObstacle] = dc.field(default_factory=list)
+    lidar: LidarConfig = dc.field(default_factory=LidarConfig)  # The TurtleBot3's LDS-01.
+    odometry: EncoderOdometryConfig = dc.field(default_factory=EncoderOdometryConfig)
+    # AMCL: config/amcl.yaml's values (tuned here; ROS's defaults leave 5 to 20 cm of error).
+    amcl: AmclConfig = dc.field(
+        default_factory=lambda: load_amcl_config(default_amcl_config_file())
+    )
+    navigator: NavigatorConfig = dc.field(default_factory=NavigatorConfig)
+    drive_rate: float = 100.0  # Hz, the wheel velocity loops (limits: the robot's).
+    plant: MultibodyPlantConfig = dc.field(
+        default_factory=lambda: MultibodyPlantConfig(
+            time_step=2e-3, contact_model="point", discrete_contact_approximation="lagged"
+        )
+    )
+    # s allowed per goal: its path length over the robot's top speed times goal_time_factor,
+    # plus goal_time_margin (turning, localising, recoveries).
+    goal_time_factor: float = 2.5
+    goal_time_margin: float = 20.0
+    log_period: float = 0.05  # s between samples of the true and estimated poses.
+    view_period: float = 0.5  # s between redraws of the costmap, particles and paths.
+    random_seed: int = 0  # Odometry errors, lidar noise, AMCL.
+
+
+def check_navigation_scenario(
+    scenario: NavigationScenario, where: str = "scenario"
+) -> NavigationScenario:
+    """Returns ``scenario`` if valid; raises ``ConfigError`` naming ``where`` and the key."""
+    check_lidar_config(scenario.lidar, f"{where}: lidar")
+    check_config(scenario.odometry, where, prefix="odometry.")
+    check_amcl_config(scenario.amcl, where, prefix="amcl.")
+    check_navigator_config(scenario.navigator, f"{where}: navigator")
+    if not (math.isfinite(scenario.plant.time_step) and scenario.plant.time_step > 0):
+        raise ConfigError(f"{where}: 'plant.time_step' must be > 0 (a discrete plant)")
+    for key in ("drive_rate", "goal_time_factor", "goal_time_margin", "log_period", "view_period"):
+        value = getattr(scenario, key)
+        if not (math.isfinite(value) and value > 0):
+            raise ConfigError(f"{where}: '{key}' must be finite and > 0, got {value!r}")
+    if scenario.random_seed < 0:
+        raise ConfigError(f"{where}: 'random_seed' must be >= 0, got {scenario.random_seed}")
+    return scenario
+
+
+def world_arena(scenario: NavigationScenario, arena: Arena, where: str = "scenario") -> Arena:
+    """``arena`` with the scenario's ``extra_obstacles`` added (checked like an arena's own:
+    inside the walls, clear of the start); the arena the robot really drives in."""
+    extra = [
+        ObstacleSpec(box=o.box, cylinder=o.cylinder, name=o.name or f"extra_{i}")
+        for i, o in enumerate(scenario.extra_obstacles)
+    ]
+    if not extra:
+        return arena
+    world = dc.replace(arena, obstacles=[*arena.obstacles, *extra])
+    return check_arena(world, f"{where}: extra_obstacles")
+
+
+def default_scenario_file() -> Path:
+    """Returns ``config/navigation_scenario.yaml``."""
+    return config_dir() / "navigation_scenario.yaml"
+
+
+def load_navigation_scenario(filename, *, defaults=None) -> NavigationScenario:
+    """Loads ``filename`` into a NavigationScenario (unknown keys are errors; missing keys keep
+    ``defaults``, the schema's own when None) and checks it.
+
+    Raises:
+        ConfigError: naming the file and the key at fault.
+    """
+    text = read_text(filename, "scenario file")
+    scenario = load_typed(NavigationScenario, data=text, defaults=defaults, where=str(filename))
+    return check_navigation_scenario(scenario, str(filename))

@@ -1,0 +1,331 @@
+"""drake_sim.systems.estimation.particle_filter: AMCL on the shipped arenas' ground-truth maps,
+synthetic scans (exact 2D ray casting, 1 cm noise) and drifting odometry along driven routes.
+
+The helpers here (``drive``, ``drifting_odometry``, ``localise``) are also used by
+``test_amcl.py`` and ``benchmarks/amcl_benchmark.py``.
+"""
+
+import dataclasses as dc
+import math
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+import drake_sim.systems.estimation.particle_filter as mut
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.map_files import OccupancyMap
+from drake_sim.base.resources import config_dir
+from drake_sim.systems.estimation.amcl import AmclConfig, load_amcl_config
+from drake_sim.systems.estimation.scan_matching_slam import compose, relative
+from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
+from drake_sim.worlds.footprints import cast_rays
+from drake_sim.worlds.route import default_route_file, load_route
+
+RATE = 5.0  # Hz, scans (the LDS-01's)
+SPEED, TURN_RATE = 0.2, 0.8  # m/s, rad/s
+SCAN_HEIGHT = 0.17  # m, the TurtleBot3's lidar plane
+SENSOR = (-0.064, 0.0, 0.0)  # X_base_sensor of the TurtleBot3's LDS-01
+ANGLES = -math.pi + 2 * math.pi * np.arange(360) / 360
+RANGE_MIN, RANGE_MAX, RANGE_SIGMA = 0.12, 3.5, 0.01  # m
+SHIPPED = config_dir() / "amcl.yaml"
+
+
+def drive(start, waypoints, duration: float) -> np.ndarray:
+    """Poses (k, 3) one scan apart over ``duration`` s along the route: turn on the spot at
+    TURN_RATE towards each waypoint, then drive straight to it at SPEED."""
+    poses, dt = [np.asarray(start, dtype=float)], 1.0 / RATE
+    steps = int(round(duration * RATE))
+    for target in waypoints:
+        while len(poses) <= steps:
+            x, y, yaw = poses[-1]
+            turn = float(mut.wrap(math.atan2(target[1] - y, target[0] - x) - yaw))
+            distance = math.hypot(target[0] - x, target[1] - y)
+            if distance < 1e-9:
+                break
+            if abs(turn) > 1e-9:
+                poses.append(
+                    np.array([x, y, yaw + math.copysign(min(abs(turn), TURN_RATE * dt), turn)])
+                )
+                continue
+            s = min(distance, SPEED * dt)
+            poses.append(np.array([x + s * math.cos(yaw), y + s * math.sin(yaw), yaw]))
+    return np.array(poses[: steps + 1])
+
+
+YAW_DRIFT = math.radians(0.5)  # rad per m
+
+
+def drifting_odometry(truth: np.ndarray, rng, scale=0.01, yaw_per_m=YAW_DRIFT):
+    """Odometry along ``truth``: ``scale`` too long, ``yaw_per_m`` rad of yaw drift per m and
+    a little noise (the mapping scenario's wheel calibration errors are 1 % and 0.5 %)."""
+    odometry = [truth[0]]
+    for before, after in zip(truth[:-1], truth[1:], strict=True):
+        step = relative(before, after)
+        length = math.hypot(step[0], step[1])
+        step[:2] *= 1.0 + scale
+        step[2] += yaw_per_m * length + rng.normal(0.0, 0.001)
+        odometry.append(compose(odometry[-1], step))
+    return np.array(odometry)
+
+
+def scan_at(footprints, pose, rng) -> np.ndarray:
+    """360 ranges (m, ``inf`` for no return) of the lidar on the base at ``pose``."""
+    x, y, yaw = compose(pose, SENSOR)
+    ranges = cast_rays(footprints, np.array([[x, y]]), ANGLES + yaw, RANGE_MAX)[0]
+    return ranges + rng.normal(0.0, RANGE_SIGMA, ranges.shape)
+
+
+def world(name: str):
+    """(arena, footprints the lidar sees, ground-truth 0.05 m map) of a shipped arena."""
+    path = config_dir() / "arenas" / f"{name}.yaml"
+    arena = load_arena(path)
+    footprints = arena_footprints(arena, height=SCAN_HEIGHT)
+    return arena, footprints, arena_grid(arena, 0.05, height=SCAN_HEIGHT), path
+
+
+def localise(name, config, seed, duration, *, offset=None, global_localization=False):
+    """Drives the arena's default route with a filter; returns (filter, rows) with one row
+    ``[t, position error m, yaw error deg, particles]`` per filter update."""
+    arena, footprints, grid, path = world(name)
+    truth = drive(arena.start_pose(), load_route(default_route_file(path)).waypoints, duration)
+    rng = np.random.default_rng(seed)
+    odometry = drifting_odometry(truth, rng)
+    dut = mut.ParticleFilter(grid, config, seed)
+    if global_localization:
+        dut.global_localization()
+    else:
+        dut.set_pose(truth[0] + offset, np.diag([0.5**2, 0.5**2, math.radians(30) ** 2]))
+    rows = []
+    for k, (pose, odom) in enumerate(zip(truth, odometry, strict=True)):
+        ranges = scan_at(footprints, pose, rng)
+        if dut.update(
+            odom, ranges, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR
+        ):
+            estimate, _ = dut.estimate()
+            yaw_error = math.degrees(abs(float(mut.wrap(estimate[2] - pose[2]))))
+            rows.append(
+                [k / RATE, math.dist(estimate[:2], pose[:2]), yaw_error, len(dut.particles)]
+            )
+    return dut, np.array(rows)
+
+
+def off_guess(seed: int) -> np.ndarray:
+    """An initial guess error 0.5 m away in a seeded direction and 30 degrees off."""
+    rng = np.random.default_rng(1000 + seed)
+    direction = rng.uniform(-math.pi, math.pi)
+    return np.array(
+        [
+            0.5 * math.cos(direction),
+            0.5 * math.sin(direction),
+            math.radians(30) * rng.choice([-1, 1]),
+        ]
+    )
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return load_amcl_config(SHIPPED)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("arena", [p.stem for p in shipped_arenas()])
+def test_tracking_from_a_rough_guess_converges_within_10_s(shipped, arena, seed):
+    _, rows = localise(arena, shipped, seed, 16.0, offset=off_guess(seed))
+    assert rows[0, 1] > 0.25 or rows[0, 2] > 15  # it did start far off
+    after = rows[rows[:, 0] >= 10.0]
+    assert len(after) >= 12  # updates kept coming while driving (every 0.08 m)
+    assert after[:, 1].max() < 0.05, after[:, 1].max()
+    assert after[:, 2].max() < 3.0, after[:, 2].max()
+    assert rows[-1, 3] < shipped.max_particles / 2  # KLD shrank the set once converged
+
+
+def test_global_localization_converges_in_the_room(shipped):
+    dut, rows = localise("room", shipped, 3, 70.0, global_localization=True)
+    assert rows[0, 1] > 0.5 and rows[0, 3] == shipped.max_particles
+    after = rows[rows[:, 0] >= 60.0]
+    assert len(after) >= 10
+    assert after[:, 1].max() < 0.05 and after[:, 2].max() < 3.0
+    _, covariance = dut.estimate()
+    assert np.sqrt(np.diag(covariance))[:2].max() < 0.1
+
+
+def test_same_seed_same_particles_other_seed_others(shipped):
+    runs = [localise("room", shipped, seed, 3.0, offset=off_guess(1))[0] for seed in (5, 5, 6)]
+    np.testing.assert_array_equal(runs[0].particles, runs[1].particles)
+    np.testing.assert_array_equal(runs[0].weights, runs[1].weights)
+    assert runs[0].particles.shape != runs[2].particles.shape or not np.array_equal(
+        runs[0].particles, runs[2].particles
+    )
+
+
+def empty_map() -> OccupancyMap:
+    """A 10 m x 10 m free map with no obstacle (its corner at (-5, -5))."""
+    return OccupancyMap(np.zeros((200, 200), dtype=np.int8), 0.05, (-5.0, -5.0, 0.0))
+
+
+def test_updates_only_after_moving_or_turning_enough():
+    config = AmclConfig(update_min_d=0.2, update_min_a=0.5, max_particles=200)
+    dut = mut.ParticleFilter(empty_map(), config, 0)
+    scan = np.full(8, np.inf), np.linspace(-3, 3, 8)
+    update = lambda odom: dut.update(odom, *scan, range_max=3.5)  # noqa: E731
+    assert update([0.0, 0.0, 0.0])  # the first scan always updates
+    assert not update([0.1, 0.1, 0.2])
+    assert update([0.15, 0.15, 0.0])  # 0.21 m from the last update
+    assert not update([0.15, 0.15, 0.45])
+    assert not update([0.15, 0.15, -0.4])
+    assert update([0.15, 0.15, -0.6])  # 0.6 rad from the last update
+    assert dut.updates == 3
+    dut.set_pose([0.0, 0.0, 0.0], np.eye(3) * 0.01)
+    assert update([0.15, 0.15, -0.6])  # a restart always updates
+
+
+def test_motion_model_moves_particles_with_the_odometry_noise_of_alpha():
+    alpha = dict(odom_alpha1=0.01, odom_alpha2=0.02, odom_alpha3=0.04, odom_alpha4=0.0)
+    config = AmclConfig(max_particles=20000, update_min_d=0.0, **alpha)
+    dut = mut.ParticleFilter(empty_map(), config, 3)
+    dut.set_pose([1.0, 0.0, math.pi / 2], np.zeros((3, 3)), odom_pose=[0.0, 0.0, 0.0])
+    no_returns = np.full(4, np.inf), np.zeros(4)
+    assert dut.update([1.0, 0.0, 0.0], *no_returns, range_max=3.5)  # 1 m straight on
+    p = dut.particles
+    along = p[:, 1]  # the particles face +y
+    np.testing.assert_allclose(along.mean(), 1.0, atol=0.01)
+    np.testing.assert_allclose(along.std(), math.sqrt(0.04), rtol=0.05)  # sqrt(alpha3) * 1 m
+    # Rotation noise from translation, sqrt(alpha2) * 1 m, on each of the two turns.
+    np.testing.assert_allclose(np.std(mut.wrap(p[:, 2] - math.pi / 2)), 0.2, rtol=0.05)
+    np.testing.assert_allclose(np.mean(p[:, 0]), 1.0, atol=0.01)
+
+
+def test_sensor_model_prefers_the_true_pose_and_skips_beams_without_return():
+    arena, footprints, grid, _ = world("room")
+    config = AmclConfig(max_particles=3, min_particles=3, laser_max_beams=90)
+    dut = mut.ParticleFilter(grid, config, 0)
+    truth = np.array([-2.2, -1.8, 0.0])
+    dut.particles = np.array([truth, truth + [0.1, 0.0, 0.0], truth + [0.0, 0.0, 0.1]])
+    dut.weights = np.full(3, 1 / 3)
+    ranges = scan_at(footprints, truth, np.random.default_rng(0))
+    dut.update(
+        truth, ranges, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR
+    )
+    # ROS's 1 + sum(pz^3) is a deliberately weak likelihood: 10 % more per scan here.
+    assert dut.weights[0] > 1.1 * dut.weights[1] and dut.weights[0] > 1.1 * dut.weights[2]
+    np.testing.assert_allclose(dut.weights.sum(), 1.0)
+    # A scan with no returns (inf, at range_max or below range_min) carries no information.
+    before = dut.weights.copy()
+    useless = np.concatenate([np.full(120, np.inf), np.full(120, RANGE_MAX), np.full(120, 0.05)])
+    dut.set_pose(truth, np.zeros((3, 3)))
+    dut.particles, dut.weights = dut.particles[:3], before
+    dut.update(truth, useless, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN)
+    np.testing.assert_array_equal(dut.weights, before)
+
+
+def test_likelihood_is_ros_sum_of_cubed_beam_likelihoods_on_the_distance_field():
+    _, footprints, grid, _ = world("warehouse")
+    config = AmclConfig(min_particles=2, max_particles=2, laser_max_beams=40)
+    dut = mut.ParticleFilter(grid, config, 0)
+    poses = np.array([[-5.2, -3.8, 0.3], [4.0, 3.5, -2.0]])
+    dut.particles, dut.weights = poses.copy(), np.array([0.5, 0.5])
+    ranges = scan_at(footprints, [-5.1, -3.7, 0.2], np.random.default_rng(1))
+    ranges[::7] = np.inf
+    dut.update(
+        [0, 0, 0], ranges, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR
+    )
+    # The same by hand: the 40 beams, those with a return, their end points' distances.
+    beams = np.round(np.linspace(0, 359, 40)).astype(int)
+    beams = beams[np.isfinite(ranges[beams])]
+    distance = ndimage.distance_transform_edt(grid.cells < 65) * grid.resolution
+    expected = []
+    for pose in poses:
+        sensor = compose(pose, SENSOR)
+        angle = sensor[2] + ANGLES[beams]
+        ends = sensor[:2] + ranges[beams, None] * np.stack([np.cos(angle), np.sin(angle)], -1)
+        rows, cols = grid.cell_of(ends)
+        inside = grid.inside(rows, cols)
+        d = np.full(len(ends), 2.0)
+        d[inside] = np.minimum(distance[rows[inside], cols[inside]], 2.0)
+        pz = 0.95 * np.exp(-(d**2) / (2 * 0.2**2)) + 0.05 / RANGE_MAX
+        expected.append(1.0 + np.sum(pz**3))
+    np.testing.assert_allclose(dut.weights, np.array(expected) / sum(expected), rtol=1e-9)
+    assert dut.weights[0] > 3 * dut.weights[1]
+
+
+def test_kld_limit_follows_fox_2003():
+    config = AmclConfig(min_particles=10, max_particles=100000, kld_err=0.05, kld_z=3.0)
+    k = 10
+    b = 2 / (9 * (k - 1))
+    expected = math.ceil((k - 1) / (2 * 0.05) * (1 - b + math.sqrt(b) * 3.0) ** 3)
+    assert mut.kld_limit(k, config) == expected
+    limits = mut.kld_limit(np.arange(2, 200), config)
+    assert np.all(np.diff(limits) > 0)  # more occupied bins need more particles
+    assert mut.kld_limit(1, config) == config.max_particles
+    clipped = dc.replace(config, min_particles=500, max_particles=1000)
+    assert mut.kld_limit(2, clipped) == 500 and mut.kld_limit(10**4, clipped) == 1000
+
+
+def test_estimate_is_the_heaviest_clusters_mean_with_yaw_wrapping_round():
+    dut = mut.ParticleFilter(empty_map(), AmclConfig(min_particles=10, max_particles=10), 0)
+    rng = np.random.default_rng(0)
+    near_pi = np.column_stack(
+        [
+            rng.normal(1.0, 0.02, 60),
+            rng.normal(2.0, 0.02, 60),
+            mut.wrap(math.pi + rng.normal(0.0, 0.05, 60)),
+        ]
+    )
+    elsewhere = np.column_stack(
+        [rng.normal(-3.0, 0.02, 40), rng.normal(0.0, 0.02, 40), np.zeros(40)]
+    )
+    dut.particles = np.vstack([near_pi, elsewhere])
+    dut.weights = np.full(100, 0.01)
+    dut.update([0.0, 0.0, 0.0], np.full(4, np.inf), np.zeros(4), range_max=3.5)
+    pose, covariance = dut.estimate()
+    np.testing.assert_allclose(pose[:2], near_pi[:, :2].mean(0), atol=1e-9)
+    assert abs(float(mut.wrap(pose[2] - math.pi))) < 0.02
+    assert covariance[0, 0] > 3.0  # the whole set's spread, both clusters
+    np.testing.assert_allclose(covariance, covariance.T)
+
+
+def test_global_localization_spreads_particles_over_free_cells_only():
+    arena, _, grid, _ = world("maze")
+    dut = mut.ParticleFilter(grid, AmclConfig(min_particles=100, max_particles=4000), 1)
+    dut.global_localization()
+    assert len(dut.particles) == 4000
+    assert np.all(grid.value_at(dut.particles[:, :2]) == 0)
+    lo, hi = dut.particles[:, :2].min(0), dut.particles[:, :2].max(0)
+    assert lo[0] < -3.3 and lo[1] < -2.8 and hi[0] > 3.3 and hi[1] > 2.8  # all over the maze
+    assert np.std(dut.particles[:, 2]) > 1.5  # and every heading
+
+
+def test_recovery_injects_random_particles_when_the_robot_is_kidnapped(shipped):
+    arena, footprints, grid, _ = world("room")
+    truth, kidnapped = np.array([-2.2, -1.8, 0.0]), np.array([1.8, 1.8, 2.0])
+    spreads = {}
+    for alpha_slow, alpha_fast in ((0.0, 0.0), (0.001, 0.1)):
+        config = dc.replace(shipped, recovery_alpha_slow=alpha_slow, recovery_alpha_fast=alpha_fast)
+        dut = mut.ParticleFilter(grid, config, 2)
+        dut.set_pose(truth, np.diag([0.01, 0.01, 0.01]))
+        rng = np.random.default_rng(2)
+        for k in range(30):  # turning on the spot: an update at every scan
+            odom = [0.0, 0.0, 0.12 * k]
+            pose = (truth if k < 15 else kidnapped) + [0.0, 0.0, 0.12 * k]
+            dut.update(
+                odom,
+                scan_at(footprints, pose, rng),
+                ANGLES,
+                range_max=RANGE_MAX,
+                range_min=RANGE_MIN,
+                X_base_sensor=SENSOR,
+            )
+        spreads[alpha_fast] = np.linalg.norm(dut.particles[:, :2] - truth[:2], axis=1).max()
+    assert spreads[0.0] < 1.0  # without recovery the cloud stays where it was
+    assert spreads[0.1] > 2.0  # with it, random particles appear all over the room
+
+
+def test_bad_initial_poses_are_config_errors():
+    dut = mut.ParticleFilter(empty_map(), AmclConfig(min_particles=10, max_particles=10), 0)
+    with pytest.raises(ConfigError, match="initial pose"):
+        dut.set_pose([0.0, math.nan, 0.0], np.eye(3))
+    with pytest.raises(ConfigError, match="positive semi-definite"):
+        dut.set_pose([0.0, 0.0, 0.0], -np.eye(3))
+    with pytest.raises(ConfigError, match="symmetric"):
+        dut.set_pose([0.0, 0.0, 0.0], np.triu(np.ones((3, 3))))

@@ -1,0 +1,107 @@
+"""``python -m drake_sim.navigate``: options, JSON report and exit codes (DESIGN.md)."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import drake_sim.navigate as mut
+from drake_sim.base import cli
+from tests import navigation_helpers as nh
+from tests.cli_helpers import assert_bad_input
+
+REPORT_KEYS = {
+    "goals",
+    "reached_all",
+    "collisions",
+    "min_clearance_m",
+    "localization_error_mean_m",
+    "localization_error_max_m",
+    "converged_after_s",
+    "sim_time_s",
+    "wall_time_s",
+    "real_time_factor",
+}
+GOAL_KEYS = {"reached", "position_error_m", "yaw_error_deg", "time_s", "path_length_m"}
+
+
+@pytest.fixture(scope="module")
+def room_map(tmp_path_factory):
+    return nh.saved_truth_map("room", tmp_path_factory.mktemp("maps"))[1]
+
+
+def test_one_goal_is_reached_and_reported(room_map, tmp_path, capsys):
+    report_file = tmp_path / "report.json"
+    code = cli.run(
+        mut.main,
+        [
+            "--headless",
+            "--map",
+            str(room_map),
+            "--goal",
+            "0",
+            "-1",
+            "90",
+            "--report",
+            str(report_file),
+            "--seed",
+            "3",
+        ],
+    )
+    assert code == 0, capsys.readouterr().err
+    report = json.loads(report_file.read_text())
+    assert report.keys() >= REPORT_KEYS and report["reached_all"] is True
+    assert report["goals"][0].keys() >= GOAL_KEYS
+    assert report["goals"][0]["position_error_m"] < 0.05
+    assert report["collisions"] == 0 and report["seed"] == 3
+    assert "1 of 1 goals reached" in capsys.readouterr().out
+
+
+def _run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "drake_sim.navigate", "--headless", *args],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def test_an_unreachable_goal_exits_1_and_says_which_and_why(room_map):
+    result = _run("--map", str(room_map), "--goal", "0.3", "1.4", "0")
+    assert result.returncode == 1, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "goal 0 (0.3, 1.4) not reached" in lines[0]
+
+
+def test_bad_map_files_are_one_line_and_exit_2(room_map, tmp_path):
+    assert_bad_input(_run("--map", str(tmp_path / "nope.yaml")), "nope.yaml")
+    malformed = tmp_path / "malformed.yaml"
+    malformed.write_text("image: [unclosed\n")
+    assert_bad_input(_run("--map", str(malformed)), "malformed.yaml")
+    pgm = room_map.with_suffix(".pgm")
+    (tmp_path / "room.pgm").write_bytes(pgm.read_bytes()[:100])
+    (tmp_path / "room.yaml").write_text(room_map.read_text())
+    assert_bad_input(_run("--map", str(tmp_path / "room.yaml")), "room.pgm")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--goal", "40", "0", "0"], "outside the map"),
+        (["--goal", "nan", "0", "0"], "--goal"),
+        (["--initial-pose", "0", "inf", "0"], "--initial-pose"),
+        (["--set", "amcl.max_particles=-5"], "max_particles"),
+        (["--set", "navigator.costmap.inflation_radius=nan"], "inflation_radius"),
+        (["--goals", "missing.yaml"], "missing.yaml"),
+        (["--goal", "1", "2"], "--goal"),
+    ],
+)
+def test_bad_options_are_one_line_and_exit_2(room_map, args, needle):
+    assert_bad_input(_run("--map", str(room_map), *args), needle)
+
+
+def test_a_goals_file_with_nan_is_bad_input(room_map, tmp_path):
+    goals = tmp_path / "goals.yaml"
+    goals.write_text("goals: [{x: .nan, y: 0.0, yaw: 0}]\n")
+    assert_bad_input(_run("--map", str(room_map), "--goals", str(goals)), "goals")

@@ -1,0 +1,138 @@
+import math
+
+import numpy as np
+import pytest
+
+import drake_sim.navigation_run as mut
+from diagrams.navigation_scenario import ExtraObstacle, world_arena
+from drake_sim.worlds.arena import BoxSpec, arena_footprints, load_arena, shipped_arenas
+from drake_sim.worlds.footprints import clearance
+from tests import navigation_helpers as nh
+
+
+@pytest.fixture(scope="module")
+def room_map(tmp_path_factory):
+    return nh.saved_truth_map("room", tmp_path_factory.mktemp("maps"))[0]
+
+
+def _run(occupancy_map, goals, *, arena="room", world=None, seed=0, **kwargs):
+    arena_ = load_arena(nh.arena_file(arena))
+    run = mut.NavigationRun(
+        nh.scenario(),
+        nh.robot(),
+        world or arena_,
+        occupancy_map,
+        start=arena_.start_pose(),
+        goals=goals,
+        seed=seed,
+        **kwargs,
+    )
+    run.run(run.default_duration())
+    return run, run.report()
+
+
+def test_a_goal_is_reached_precisely_without_touching_anything(room_map):
+    goal = nh.pose_deg(0.0, -1.0, 90.0)
+    run, report = _run(room_map, [goal])
+    assert report.end == "done" and report.reached_all
+    (result,) = report.goals
+    assert result.reached and result.message == "arrived"
+    assert result.position_error_m < 0.05 and result.yaw_error_deg < 10.0
+    assert result.goal == pytest.approx([0.0, -1.0, 90.0])
+    assert 2.2 < result.path_length_m < 3.5  # about 2.6 m from the start
+    assert report.collisions == 0 and 0.1 < report.min_clearance_m < 1.0
+    assert report.converged_after_s == 0.0  # started from the true pose
+    assert report.localization_error_max_m < 0.05
+    assert report.sim_time_s == pytest.approx(run.context.get_time())
+    assert report.to_dict()["goals"][0]["reached"] is True
+
+
+def test_an_unreachable_goal_fails_fast_and_says_so(room_map):
+    # The middle of box_c in the room: no free cell within the planner's tolerance.
+    run, report = _run(room_map, [nh.pose_deg(0.3, 1.4, 0.0)])
+    assert report.end == "failed" and not report.reached_all
+    (result,) = report.goals
+    assert not result.reached and "unreachable" in result.message or "obstacle" in result.message
+    assert result.time_s < 5.0
+
+
+def test_the_default_duration_allows_each_goal_its_time(room_map):
+    goals = [nh.pose_deg(0.0, -1.0, 90.0), nh.pose_deg(2.0, 0.0, 0.0)]
+    arena = load_arena(nh.arena_file("room"))
+    run = mut.NavigationRun(
+        nh.scenario(), nh.robot(), arena, room_map, start=arena.start_pose(), goals=goals
+    )
+    start = arena.start_pose()[:2]
+    expected = run.goal_timeout(goals[0], start) + run.goal_timeout(goals[1], goals[0][:2])
+    assert run.default_duration() == pytest.approx(expected)
+
+
+def _random_goals(arena_name, count, seed):
+    """``count`` goals in the arena's free space, at least 0.4 m from anything."""
+    arena = load_arena(nh.arena_file(arena_name))
+    footprints = arena_footprints(arena)
+    rng = np.random.default_rng(seed)
+    lo, hi = np.array(arena.size) * -0.5, np.array(arena.size) * 0.5
+    goals = []
+    while len(goals) < count:
+        xy = rng.uniform(lo, hi)
+        if clearance(footprints, xy[None])[0] >= 0.4:
+            goals.append(np.array([*xy, rng.uniform(-math.pi, math.pi)]))
+    return goals
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("arena_file", shipped_arenas(), ids=lambda p: p.stem)
+def test_ten_random_goals_per_arena_are_reached(arena_file, tmp_path):
+    occupancy_map, _ = nh.saved_truth_map(arena_file.stem, tmp_path)
+    goals = _random_goals(arena_file.stem, 10, seed=7)
+    run, report = _run(occupancy_map, goals, arena=arena_file.stem)
+    assert report.reached_all, [g.message for g in report.goals]
+    assert report.collisions == 0
+    top_speed = run.scenario.navigator.controller.max_vel_x
+    for g in report.goals:
+        assert g.position_error_m <= 0.05 and g.yaw_error_deg <= 10.0
+        assert g.time_s <= 2.5 * g.path_length_m / top_speed + 5.0  # + turning on the spot
+
+
+@pytest.mark.slow
+def test_a_box_put_across_the_path_after_mapping_is_avoided(room_map):
+    arena = load_arena(nh.arena_file("room"))
+    scenario = nh.scenario()
+    scenario.extra_obstacles = [
+        ExtraObstacle(box=BoxSpec(size=[0.4, 0.6, 0.3], position=[0.3, -1.8]))
+    ]
+    world = world_arena(scenario, arena)
+    run = mut.NavigationRun(
+        scenario,
+        nh.robot(),
+        world,
+        room_map,
+        start=arena.start_pose(),
+        goals=[nh.pose_deg(2.0, -1.8, 0.0)],
+    )
+    run.run(run.default_duration())
+    report = run.report()
+    assert report.reached_all and report.collisions == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("arena_file", shipped_arenas(), ids=lambda p: p.stem)
+def test_amcl_converges_from_half_a_metre_and_30_degrees_off(arena_file, tmp_path):
+    occupancy_map, _ = nh.saved_truth_map(arena_file.stem, tmp_path)
+    arena = load_arena(arena_file)
+    x, y, yaw = arena.start_pose()
+    guess = np.array([x + 0.5 * math.cos(1.0), y + 0.5 * math.sin(1.0), yaw + math.radians(30)])
+    goal = _random_goals(arena_file.stem, 1, seed=3)[0]
+    run, report = _run(occupancy_map, [goal], arena=arena_file.stem, initial_estimate=guess)
+    times, position, heading = run.localization_errors()
+    after = times >= 10.0
+    assert after.any()
+    assert position[after].max() < 0.05 and heading[after].max() < 3.0
+
+
+@pytest.mark.slow
+def test_global_localization_converges_in_the_room(room_map):
+    goals = _random_goals("room", 4, seed=11)
+    run, report = _run(room_map, goals, global_localization=True)
+    assert report.converged_after_s is not None and report.converged_after_s <= 60.0

@@ -1,0 +1,35 @@
+"""Shared by the navigation tests: maps saved from the arenas' ground truth (what a perfect
+mapping run would save), the robot and the scenario."""
+
+import numpy as np
+
+from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
+from drake_sim.base.map_files import OccupancyMap, load_map, save_map
+from drake_sim.base.resources import config_dir
+from drake_sim.robots.turtlebot3 import default_turtlebot3_file
+from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.worlds.arena import arena_grid, load_arena
+
+
+def robot():
+    return load_turtlebot3_params(default_turtlebot3_file())
+
+
+def scenario():
+    return load_navigation_scenario(default_scenario_file())
+
+
+def arena_file(name: str):
+    return config_dir() / "arenas" / f"{name}.yaml"
+
+
+def saved_truth_map(name: str, folder) -> tuple[OccupancyMap, object]:
+    """The arena ``name``'s ground truth at the lidar's height, saved as map_server files in
+    ``folder`` and loaded back; returns the map and its ``.yaml`` path."""
+    truth = arena_grid(load_arena(arena_file(name)), 0.05, height=robot().scan_height)
+    _, yaml_file = save_map(truth, folder / name)
+    return load_map(yaml_file), yaml_file
+
+
+def pose_deg(x: float, y: float, yaw_deg: float) -> np.ndarray:
+    return np.array([x, y, np.radians(yaw_deg)])
