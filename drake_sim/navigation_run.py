@@ -6,7 +6,8 @@ The report's keys are DESIGN.md's (``python -m drake_sim.navigate``). Per goal: 
 ``position_error_m`` and ``yaw_error_deg`` (the true pose when the navigator reported it
 arrived, against the goal), ``time_s`` (from the goal's start to its end) and
 ``path_length_m`` (the distance the robot drove for it, by its estimated pose).
-``collisions`` counts the checks (every ``CHECK_PERIOD``) at which a robot geometry touched anything but the floor;
+``collisions`` counts the checks (every ``CHECK_PERIOD``) at which a robot geometry touched
+anything but the floor;
 ``min_clearance_m`` is the smallest distance seen between the robot's geometry and the
 arena's walls and obstacles. Localisation is converged from the first log sample whose AMCL
 error is under ``CONVERGED_M`` and ``CONVERGED_DEG``; the error's mean and max are taken from

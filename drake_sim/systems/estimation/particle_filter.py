@@ -142,7 +142,8 @@ class ParticleFilter:
         Runs a filter update (motion, sensor, and every ``resample_interval`` updates a
         resampling, with ``selective_resampling`` only when the effective sample size is
         below half the count or recovery is due) when the odometry has moved
-        ``update_min_d`` or turned ``update_min_a`` since the last update, and always for the first scan after a (re)start.
+        ``update_min_d`` or turned ``update_min_a`` since the last update, and always for
+        the first scan after a (re)start.
 
         Args:
             odom_pose: [x, y, yaw] of the base from wheel odometry (m, m, rad), any fixed frame.
