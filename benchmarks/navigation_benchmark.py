@@ -7,9 +7,9 @@ ground-truth map (what a perfect mapping run saves; ``--map-dir`` takes saved ma
 
 * the real-time factor of the room's goals (``config/goals/room.yaml``), ``--runs`` times, and
   the median (target >= 2);
-* per arena, ``--goals`` random goals (seeded; at least 0.4 m from anything): reached, the
+* per arena, ``--goals`` random goals (``random_goals``, seed 7): reached, the
   largest position and heading errors against the truth, collisions, the smallest clearance,
-  the worst time over path length / top speed (target <= 2.5), the real-time factor;
+  the worst time over driven length / the robot's top speed (target <= 2.5), the real-time factor;
 * AMCL alone: the median cost of one filter update with 2000 particles (target < 5 ms).
 
 Not a test: speeds depend on the machine.
@@ -34,24 +34,11 @@ from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
 from drake_sim.systems.estimation.particle_filter import ParticleFilter
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
-from drake_sim.worlds.footprints import cast_rays, clearance
-from drake_sim.worlds.route import default_goals_file, load_goals
+from drake_sim.worlds.footprints import cast_rays
+from drake_sim.worlds.route import default_goals_file, load_goals, random_goals
 
 AMCL_UPDATES = 100
 """Filter updates timed for AMCL's cost."""
-
-
-def random_goals(arena, count: int, seed: int) -> list[np.ndarray]:
-    """``count`` goals ``[x, y, yaw]`` in the arena, at least 0.4 m from any wall or obstacle."""
-    footprints = arena_footprints(arena)
-    rng = np.random.default_rng(seed)
-    half = 0.5 * np.array(arena.size)
-    goals = []
-    while len(goals) < count:
-        xy = rng.uniform(-half, half)
-        if clearance(footprints, xy[None])[0] >= 0.4:
-            goals.append(np.array([*xy, rng.uniform(-math.pi, math.pi)]))
-    return goals
 
 
 def run_goals(scenario, robot, arena, occupancy_map, goals, seed=0):
@@ -89,7 +76,7 @@ def main() -> None:
     args = parser.parse_args()
     scenario = load_navigation_scenario(default_scenario_file())
     robot = load_turtlebot3_params(default_turtlebot3_file())
-    top = scenario.navigator.controller.max_vel_x
+    top = robot.limits.max_linear_velocity
     maps = {}
     with tempfile.TemporaryDirectory() as tmp:
         for path in shipped_arenas():

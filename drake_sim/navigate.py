@@ -4,8 +4,10 @@ AMCL localises the robot on ``--map`` (map_server's ``.yaml``) from a first gues
 (``--initial-pose``, default the true start) or from nothing (``--global-localization``), and
 the navigator (a global costmap from the map and the live scans, A* on it, a DWA local planner
 on a rolling local costmap, recoveries) drives it to each goal in turn: ``--goal X Y YAW`` or
-``--goals FILE`` (``goals: [{x, y, yaw}]``, metres and degrees), by default the arena's goals
-file in ``config/goals/``. The robot really drives in ``--arena`` (default the scenario's),
+``--goals FILE`` (``goals: [{x, y, yaw}]``, metres and degrees). Without either, with a viewer,
+goals and pose estimates are given in the Meshcat page (sliders and buttons standing in for
+RViz's "2D Nav Goal" and "2D Pose Estimate") until Ctrl-C; headless, the arena's goals file in
+``config/goals/`` is driven. The robot really drives in ``--arena`` (default the scenario's),
 which may hold obstacles the map does not (``extra_obstacles`` in the scenario). Exit codes: 0
 when every goal was reached, 1 when one was not (one line says which and why), 2 for bad input.
 """
@@ -28,9 +30,10 @@ from diagrams.navigation_scenario import (
 from drake_sim.base import cli, config
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap, load_map
-from drake_sim.navigation_run import NavigationRun
+from drake_sim.navigation_run import CHECK_PERIOD, NavigationRun
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.systems.viewer.goal_panel import GoalPanel
 from drake_sim.worlds.arena import load_arena
 from drake_sim.worlds.route import default_goals_file, load_goals
 
@@ -94,7 +97,14 @@ def load_scenario(args) -> NavigationScenario:
     return check_navigation_scenario(scenario, "--set" if args.set else str(args.config))
 
 
+def _interactive(args) -> bool:
+    """Goals from the Meshcat page: a viewer and no goal on the command line."""
+    return not args.headless and args.goal is None and args.goals is None
+
+
 def _goals(args, arena_file, occupancy_map) -> list[np.ndarray]:
+    if _interactive(args):
+        return []
     if args.goal is not None:
         return [_check_pose(args.goal, "--goal", occupancy_map)]
     path = args.goals if args.goals is not None else default_goals_file(arena_file)
@@ -141,13 +151,24 @@ def main(argv=None) -> int:
             meshcat.SetProperty("/Grid", "visible", False)
             if args.record:
                 meshcat.StartRecording()
-        if viewer:
-            cli.announce(meshcat, "navigating")
-        run.run(duration)
+        if _interactive(args):
+            _drive_from_the_page(run, meshcat, occupancy_map, start, args.duration)
+        else:
+            if viewer:
+                cli.announce(meshcat, "navigating")
+            run.run(duration)
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
     report = run.report()
+    if _interactive(args):
+        print(
+            f"{len(report.goals)} goals given in the page, "
+            f"{sum(g.reached for g in report.goals)} reached; {report.sim_time_s:.1f} s simulated"
+        )
+        if args.report:
+            cli.write_text(args.report, json.dumps(report.to_dict(), indent=2) + "\n", "report")
+        return cli.EXIT_OK
     reached = sum(g.reached for g in report.goals)
     print(
         f"{reached} of {len(goals)} goals reached, ended by {report.end}; collisions "
@@ -162,6 +183,31 @@ def main(argv=None) -> int:
         return cli.EXIT_OK
     print(f"error: {_why(run, report, goals)}", file=sys.stderr)
     return cli.EXIT_FAILED
+
+
+def _drive_from_the_page(run, meshcat, occupancy_map, start, duration) -> None:
+    """Runs until Ctrl-C (or ``duration``), turning the page's presses into goals, pose
+    estimates and global localisation."""
+    lower = np.array(occupancy_map.origin[:2])
+    upper = lower + [occupancy_map.width_m, occupancy_map.height_m]
+    panel = GoalPanel(meshcat=meshcat, lower=lower, upper=upper, start=start)
+    cli.announce(meshcat, "waiting for goals: set x, y, yaw with the sliders, press a button")
+    end = math.inf if duration is None else duration
+    try:
+        while run.context.get_time() < end:
+            for action, pose in panel.poll():
+                if action == "goal":
+                    run.send_goal(pose)
+                elif action == "pose":
+                    run.set_pose_estimate(pose)
+                else:
+                    run.start_global_localization()
+            run.advance(CHECK_PERIOD)
+    except BaseException as e:
+        if not cli.is_stop(e):
+            raise
+    finally:
+        panel.remove()
 
 
 def _m(value) -> str:

@@ -78,6 +78,33 @@ class NavigationReport(RunReport):
     converged_after_s: float | None  # None: never converged.
 
 
+class NavigationHandle:
+    """A goal sent with ``NavigationRun.send_goal``, like an action goal handle: ``done()``,
+    ``result()``, ``cancel()`` and ``distance_left_m``. It does not advance the simulation."""
+
+    def __init__(self, run: "NavigationRun", index: int):
+        self._run = run
+        self._index = index  # its place among the navigator's finished goals
+
+    def done(self) -> bool:
+        """True once the navigator has finished with the goal (reached, failed, cancelled)."""
+        return len(self._run.results) > self._index
+
+    def result(self) -> GoalReport | None:
+        """The goal's report once ``done()``, else None."""
+        return self._run.results[self._index] if self.done() else None
+
+    def cancel(self) -> None:
+        """Stops the robot and ends the goal (not reached, "canceled")."""
+        if not self.done():
+            self._run.navigator.cancel(self._run.navigator.GetMyContextFromRoot(self._run.context))
+
+    @property
+    def distance_left_m(self) -> float:
+        """m along the current global path (0 when done)."""
+        return 0.0 if self.done() else float(self._run.status().path_length_m)
+
+
 class NavigationRun:
     """Builds the navigation diagram and a simulator for one run. ``run`` drives the goals
     given at construction; ``navigate_to`` sends one more and waits for it.
@@ -180,6 +207,55 @@ class NavigationRun:
     def status(self):
         """The navigator's ``NavigationStatus`` now."""
         return self.diagram.GetOutputPort("navigation_status").Eval(self.context)
+
+    def advance(self, duration: float) -> None:
+        """Simulates ``duration`` more seconds, keeping the goals' bookkeeping (for Python
+        callers driving the run themselves, with ``send_goal``)."""
+        end = self.context.get_time() + duration
+        start = time.perf_counter()
+        try:
+            while self.context.get_time() < end - 1e-9:
+                self.simulator.AdvanceTo(min(end, self.context.get_time() + CHECK_PERIOD))
+                self._check()
+        finally:
+            self.wall_time += time.perf_counter() - start
+
+    def send_goal(self, goal) -> "NavigationHandle":
+        """Drives to ``goal`` ``[x, y, yaw]`` (m, m, rad) from now on, preempting the current
+        goal (RViz's "2D Nav Goal"); returns its handle. The run moves on with ``advance``."""
+        status = self.status()
+        active = status.state not in ("idle", "arrived", "failed")
+        navigator_context = self.navigator.GetMyContextFromRoot(self.context)
+        self.navigator.set_goal(navigator_context, np.asarray(goal, dtype=float))
+        self.goals.append(np.asarray(goal, dtype=float))
+        return NavigationHandle(self, len(status.results) + int(active))
+
+    def navigate_to(self, goal, timeout: float | None = None) -> GoalReport:
+        """Drives to ``goal`` ``[x, y, yaw]`` and returns its ``GoalReport`` once the navigator
+        has finished with it, or after ``timeout`` simulated seconds (default
+        ``goal_timeout``; the goal is then cancelled and reported not reached)."""
+        pose = self.diagram.GetOutputPort("estimated_pose").Eval(self.context)
+        handle = self.send_goal(goal)
+        limit = self.goal_timeout(np.asarray(goal, dtype=float), pose[:2])
+        deadline = self.context.get_time() + (limit if timeout is None else timeout)
+        while not handle.done() and self.context.get_time() < deadline:
+            self.advance(CHECK_PERIOD)
+        if not handle.done():
+            handle.cancel()
+            self.advance(CHECK_PERIOD)
+        return handle.result()
+
+    def set_pose_estimate(self, pose, covariance=None) -> None:
+        """Restarts AMCL around ``pose`` ``[x, y, yaw]`` (RViz's "2D Pose Estimate"), with
+        ``covariance`` (3 x 3) or the AMCL config's initial one."""
+        config = self.scenario.amcl
+        covariance = config.initial_covariance() if covariance is None else covariance
+        amcl_context = self.amcl.GetMyContextFromRoot(self.context)
+        self.amcl.set_pose(amcl_context, np.asarray(pose, dtype=float), np.asarray(covariance))
+
+    def start_global_localization(self) -> None:
+        """Spreads AMCL's particles over the map's free space (ROS's global_localization)."""
+        self.amcl.start_global_localization(self.amcl.GetMyContextFromRoot(self.context))
 
     # --- bookkeeping ---------------------------------------------------------------------
 

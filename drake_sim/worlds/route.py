@@ -160,3 +160,26 @@ def route_clearance(route: Route, arena: Arena, spacing: float = SEGMENT_CHECK_S
     obstacle."""
     points = route.sample(arena.start_pose()[:2], spacing)
     return float(clearance(arena_footprints(arena), points).min())
+
+
+def random_goals(
+    arena: Arena, count: int, seed: int, *, margin: float = 0.4, spacing: float = 1.0
+) -> list[np.ndarray]:
+    """``count`` goals ``[x, y, yaw]`` (m, m, rad) drawn uniformly in ``arena`` (seeded), each
+    at least ``margin`` m from every wall and obstacle and ``spacing`` m from the one before
+    (the first from the start). Not every one need be reachable from the start (an enclosed
+    pocket would not be); the shipped arenas have none."""
+    footprints = arena_footprints(arena)
+    rng = np.random.default_rng(seed)
+    half = 0.5 * np.asarray(arena.size, dtype=float)
+    goals, previous = [], np.asarray(arena.start_pose()[:2])
+    for _ in range(10_000 * count):
+        if len(goals) == count:
+            break
+        xy = rng.uniform(-half, half)
+        if clearance(footprints, xy[None])[0] >= margin and math.dist(xy, previous) >= spacing:
+            goals.append(np.array([*xy, rng.uniform(-math.pi, math.pi)]))
+            previous = xy
+    if len(goals) < count:
+        raise ValueError(f"found only {len(goals)} of {count} goals with that margin")
+    return goals

@@ -105,3 +105,27 @@ def test_a_goals_file_with_nan_is_bad_input(room_map, tmp_path):
     goals = tmp_path / "goals.yaml"
     goals.write_text("goals: [{x: .nan, y: 0.0, yaw: 0}]\n")
     assert_bad_input(_run("--map", str(room_map), "--goals", str(goals)), "goals")
+
+
+class _FakePanel:
+    """Presses "2D Nav Goal" once, at (-1.0, -1.8) heading east, then nothing."""
+
+    def __init__(self, **kwargs):
+        self.presses = [[("goal", nh.pose_deg(-1.0, -1.8, 0.0))]]
+
+    def poll(self):
+        return self.presses.pop() if self.presses else []
+
+    def remove(self):
+        pass
+
+
+def test_goals_from_the_page_with_a_viewer(room_map, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(mut, "GoalPanel", _FakePanel)
+    report_file = tmp_path / "report.json"
+    args = ["--map", str(room_map), "--duration", "15", "--report", str(report_file)]
+    assert cli.run(mut.main, args) == 0
+    report = json.loads(report_file.read_text())
+    (goal,) = report["goals"]
+    assert goal["reached"] and goal["position_error_m"] < 0.05
+    assert "1 goals given in the page, 1 reached" in capsys.readouterr().out

@@ -5,8 +5,8 @@ import pytest
 
 import drake_sim.navigation_run as mut
 from diagrams.navigation_scenario import ExtraObstacle, world_arena
-from drake_sim.worlds.arena import BoxSpec, arena_footprints, load_arena, shipped_arenas
-from drake_sim.worlds.footprints import clearance
+from drake_sim.worlds.arena import BoxSpec, load_arena, shipped_arenas
+from drake_sim.worlds.route import random_goals
 from tests import navigation_helpers as nh
 
 
@@ -68,17 +68,7 @@ def test_the_default_duration_allows_each_goal_its_time(room_map):
 
 
 def _random_goals(arena_name, count, seed):
-    """``count`` goals in the arena's free space, at least 0.4 m from anything."""
-    arena = load_arena(nh.arena_file(arena_name))
-    footprints = arena_footprints(arena)
-    rng = np.random.default_rng(seed)
-    lo, hi = np.array(arena.size) * -0.5, np.array(arena.size) * 0.5
-    goals = []
-    while len(goals) < count:
-        xy = rng.uniform(lo, hi)
-        if clearance(footprints, xy[None])[0] >= 0.4:
-            goals.append(np.array([*xy, rng.uniform(-math.pi, math.pi)]))
-    return goals
+    return random_goals(load_arena(nh.arena_file(arena_name)), count, seed)
 
 
 @pytest.mark.slow
@@ -89,10 +79,10 @@ def test_ten_random_goals_per_arena_are_reached(arena_file, tmp_path):
     run, report = _run(occupancy_map, goals, arena=arena_file.stem)
     assert report.reached_all, [g.message for g in report.goals]
     assert report.collisions == 0
-    top_speed = run.scenario.navigator.controller.max_vel_x
+    top_speed = run.robot.limits.max_linear_velocity  # 0.26 m/s
     for g in report.goals:
         assert g.position_error_m <= 0.05 and g.yaw_error_deg <= 10.0
-        assert g.time_s <= 2.5 * g.path_length_m / top_speed + 5.0  # + turning on the spot
+        assert g.time_s <= 2.5 * g.path_length_m / top_speed
 
 
 @pytest.mark.slow
@@ -123,11 +113,11 @@ def test_amcl_converges_from_half_a_metre_and_30_degrees_off(arena_file, tmp_pat
     arena = load_arena(arena_file)
     x, y, yaw = arena.start_pose()
     guess = np.array([x + 0.5 * math.cos(1.0), y + 0.5 * math.sin(1.0), yaw + math.radians(30)])
-    goal = _random_goals(arena_file.stem, 1, seed=3)[0]
-    run, report = _run(occupancy_map, [goal], arena=arena_file.stem, initial_estimate=guess)
+    goals = _random_goals(arena_file.stem, 3, seed=3)  # driving well over 10 s
+    run, report = _run(occupancy_map, goals, arena=arena_file.stem, initial_estimate=guess)
     times, position, heading = run.localization_errors()
     after = times >= 10.0
-    assert after.any()
+    assert times[-1] > 20.0
     assert position[after].max() < 0.05 and heading[after].max() < 3.0
 
 
@@ -136,3 +126,32 @@ def test_global_localization_converges_in_the_room(room_map):
     goals = _random_goals("room", 4, seed=11)
     run, report = _run(room_map, goals, global_localization=True)
     assert report.converged_after_s is not None and report.converged_after_s <= 60.0
+
+
+def test_navigate_to_from_python_and_a_handle_that_is_cancelled(room_map):
+    arena = load_arena(nh.arena_file("room"))
+    run = mut.NavigationRun(nh.scenario(), nh.robot(), arena, room_map, start=arena.start_pose())
+    result = run.navigate_to(nh.pose_deg(-1.0, -1.8, 0.0))
+    assert result.reached and result.position_error_m < 0.05
+    handle = run.send_goal(nh.pose_deg(2.0, -1.8, 0.0))
+    assert not handle.done() and handle.result() is None
+    run.advance(2.0)
+    assert 0.0 < handle.distance_left_m < 3.5
+    handle.cancel()
+    run.advance(0.3)
+    assert handle.done() and not handle.result().reached
+    assert "cancel" in handle.result().message
+    command = run.diagram.GetOutputPort("cmd_vel").Eval(run.context)
+    assert np.allclose(command, 0.0)
+
+
+def test_a_pose_estimate_restarts_amcl_where_it_is_put(room_map):
+    arena = load_arena(nh.arena_file("room"))
+    run = mut.NavigationRun(nh.scenario(), nh.robot(), arena, room_map, start=arena.start_pose())
+    run.advance(0.5)
+    run.set_pose_estimate(nh.pose_deg(1.0, 1.0, 90.0), np.diag([0.01, 0.01, 0.01]))
+    particles = run.diagram.GetOutputPort("particles").Eval(run.context)
+    assert np.abs(np.mean(particles[:, :2], axis=0) - [1.0, 1.0]).max() < 0.1
+    run.start_global_localization()
+    particles = run.diagram.GetOutputPort("particles").Eval(run.context)
+    assert np.ptp(particles[:, 0]) > 4.0  # over the whole room

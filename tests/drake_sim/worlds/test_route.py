@@ -187,3 +187,18 @@ def test_default_files_sit_beside_the_config_and_exist_for_shipped_arenas(tmp_pa
         assert mut.default_route_file(path).is_file() and mut.default_goals_file(path).is_file()
     assert not mut.default_route_file(tmp_path / "elsewhere.yaml").exists()
     assert mut.default_goals_file("elsewhere.yaml") == config_dir() / "goals" / "elsewhere.yaml"
+
+
+def test_random_goals_keep_their_margin_and_spacing_and_repeat_per_seed():
+    arena = load_arena(config_dir() / "arenas" / "maze.yaml")
+    goals = mut.random_goals(arena, 12, seed=4, margin=0.4, spacing=1.0)
+    assert len(goals) == 12
+    xy = np.array([g[:2] for g in goals])
+    assert (clearance(arena_footprints(arena), xy) >= 0.4).all()
+    previous = np.vstack([arena.start_pose()[:2], xy[:-1]])
+    assert (np.hypot(*(xy - previous).T) >= 1.0).all()
+    assert all(-np.pi <= g[2] <= np.pi for g in goals)
+    again = mut.random_goals(arena, 12, seed=4, margin=0.4, spacing=1.0)
+    assert np.array_equal(np.array(goals), np.array(again))
+    with pytest.raises(ValueError, match="margin"):
+        mut.random_goals(arena, 2, seed=0, margin=5.0)
