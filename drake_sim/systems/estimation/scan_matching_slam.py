@@ -57,8 +57,8 @@ class SlamConfig:
     # the finest cell; one finer level halves the drift of a long run (measured in the tests).
     fine_levels: int = 1
     map_size: float = 30.0  # m, side of the square maps, centred on the initial pose.
-    map_update_distance: float = 0.4  # m travelled since the last map update.
-    map_update_angle_deg: float = 30.0  # Degrees turned since the last map update.
+    map_update_distance: float = 0.2  # m travelled since the last map update.
+    map_update_angle_deg: float = 15.0  # Degrees turned since the last map update.
     initial_map_updates: int = 3  # The first scans always update the map.
     p_hit: float = 0.7  # Occupancy probability of a beam's end cell.
     p_miss: float = 0.4  # Occupancy probability of a cell a beam crossed.

@@ -247,5 +247,5 @@ def test_defaults_are_ros_amcl_and_the_shipped_file_loads():
     assert (ros.laser_max_beams, ros.laser_z_hit, ros.laser_z_rand) == (30, 0.95, 0.05)
     assert (ros.laser_sigma_hit, ros.laser_likelihood_max_dist) == (0.2, 2.0)
     assert ros.odom_alpha1 == ros.odom_alpha4 == 0.2 and ros.recovery_alpha_slow == 0.0
-    assert shipped.max_particles == 8000 and shipped.laser_max_beams == 60
+    assert shipped.max_particles == 8000 and shipped.laser_max_beams == 90
     np.testing.assert_allclose(np.diag(shipped.initial_covariance()), [0.25, 0.25, 0.2742])

@@ -135,7 +135,8 @@ def _route_moves(waypoints, speed=0.2, turn_rate=1.0):
 
 def test_default_drift_over_a_room_route_is_what_slam_must_correct():
     """A 37 m lawnmower route with 13 turns in a 6 m x 5 m room: the default errors drift by
-    tens of centimetres and a few degrees, as a real TurtleBot3's odometry does."""
+    tens of centimetres to a couple of metres and tens of degrees: a poorly calibrated robot's
+    odometry, the kind that needs SLAM."""
     waypoints = [(-2, -1.5), (2, -1.5), (2, -0.5), (-2, -0.5), (-2, 0.5), (2, 0.5), (2, 1.5)]
     waypoints += [(-2, 1.5), (-2, -1.5), (0, 0), (2, -1.5), (2, 1.5), (-2, 1.5), (-2, -1.5)]
     moves, (x, y, yaw) = _route_moves(waypoints)
@@ -144,8 +145,8 @@ def test_default_drift_over_a_room_route_is_what_slam_must_correct():
         pose, _ = _run(moves, mut.EncoderOdometryConfig(), seed=seed, initial_pose=(-2, -1.5, 0))
         drifts.append(math.hypot(pose[0] - x, pose[1] - y))
         yaw_errors.append(abs(math.degrees(math.remainder(pose[2] - yaw, 2 * math.pi))))
-    assert 0.2 < np.median(drifts) < 1.0 and max(drifts) < 1.5
-    assert 1.0 < np.median(yaw_errors) < 15.0
+    assert 0.2 < np.median(drifts) < 1.5 and max(drifts) < 3.0
+    assert 3.0 < np.median(yaw_errors) < 30.0
 
 
 def test_slip_noise_grows_with_the_square_root_of_distance():
