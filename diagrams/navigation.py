@@ -6,34 +6,19 @@ the map, the costmap, the particles, the paths and the true trail.
 ``make_navigation_diagram`` builds it; a pure builder (nothing is simulated here).
 """
 
-import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
-from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import LogVectorOutput, MatrixGain
+from pydrake.systems.primitives import LogVectorOutput
 
+from diagrams.lidar_robot import add_lidar_robot
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base.map_files import OccupancyMap
-from drake_sim.robots.turtlebot3 import (
-    BASE_FOOTPRINT,
-    LIDAR_FRAME,
-    add_turtlebot3,
-    drive_limits,
-    start_pose,
-    wheel_state_selector,
-)
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
-from drake_sim.systems.control.diff_drive_controller import DiffDriveConfig, DiffDriveController
 from drake_sim.systems.estimation.amcl import Amcl
-from drake_sim.systems.estimation.encoder_odometry import EncoderOdometry, PlanarGroundTruth
-from drake_sim.systems.sensors.lidar import add_lidar
 from drake_sim.systems.viewer.navigation_view import NavigationView
 from drake_sim.systems.viewer.trails import TrailVisualizer
 from drake_sim.worlds.arena import Arena
-from drake_sim.worlds.arena_world import add_arena
 from planning.mobile.navigator import Navigator
-
-ROBOT_NAME = "turtlebot3"
 
 
 def make_navigation_diagram(
@@ -66,49 +51,18 @@ def make_navigation_diagram(
     systems are named ``amcl``, ``navigator``, ``lidar`` and ``plant``.
     """
     builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlant(scenario.plant, builder)
-    add_arena(plant, world)
-    instance = add_turtlebot3(plant, robot, name=ROBOT_NAME)
-    plant.Finalize()
-    start = np.asarray(start, dtype=float)
-    base = plant.GetBodyByName(BASE_FOOTPRINT, instance)
-    plant.SetDefaultFloatingBaseBodyPose(base, start_pose(*start))
-
-    wheels = builder.AddNamedSystem(
-        "wheel_state", MatrixGain(wheel_state_selector(plant, instance))
-    )
-    builder.Connect(plant.get_state_output_port(), wheels.get_input_port())
-    drive = DiffDriveConfig(rate=scenario.drive_rate, **drive_limits(robot))
-    controller = builder.AddNamedSystem(
-        "diff_drive", DiffDriveController(robot=robot, config=drive, upside_down_aware=False)
-    )
-    builder.Connect(wheels.get_output_port(), controller.GetInputPort("wheel_state"))
-    builder.Connect(
-        controller.GetOutputPort("wheel_torques"), plant.get_actuation_input_port(instance)
-    )
-    odometry = builder.AddNamedSystem(
-        "odometry",
-        EncoderOdometry(
-            wheel_radius=robot.wheel.radius,
-            wheel_separation=robot.wheel_separation,
-            config=scenario.odometry,
-            initial_pose=start,
-            seed=scenario.random_seed,
-        ),
-    )
-    builder.Connect(wheels.get_output_port(), odometry.GetInputPort("wheel_state"))
-    truth = builder.AddNamedSystem("true_pose", PlanarGroundTruth(plant=plant, body=base))
-    builder.Connect(plant.get_body_poses_output_port(), truth.get_input_port())
-    lidar = add_lidar(
+    robot_parts = add_lidar_robot(
         builder,
-        plant,
-        scene_graph,
-        frame=plant.GetFrameByName(LIDAR_FRAME, instance),
-        config=scenario.lidar,
-        ignore=[instance],
+        plant_config=scenario.plant,
+        robot=robot,
+        world=world,
+        start=start,
+        lidar=scenario.lidar,
+        odometry=scenario.odometry,
+        drive_rate=scenario.drive_rate,
         seed=scenario.random_seed,
     )
-    X_base_sensor = (robot.lidar.x, robot.lidar.y, 0.0)
+    X_base_sensor = robot_parts.X_base_sensor
     amcl = builder.AddNamedSystem(
         "amcl",
         Amcl(
@@ -122,8 +76,8 @@ def make_navigation_diagram(
             global_localization=global_localization,
         ),
     )
-    builder.Connect(lidar.GetOutputPort("scan"), amcl.GetInputPort("scan"))
-    builder.Connect(odometry.GetOutputPort("pose"), amcl.GetInputPort("odometry"))
+    builder.Connect(robot_parts.scan, amcl.GetInputPort("scan"))
+    builder.Connect(robot_parts.odometry_pose, amcl.GetInputPort("odometry"))
     navigator = builder.AddNamedSystem(
         "navigator",
         Navigator(
@@ -134,37 +88,37 @@ def make_navigation_diagram(
         ),
     )
     builder.Connect(amcl.GetOutputPort("pose"), navigator.GetInputPort("pose"))
-    builder.Connect(odometry.GetOutputPort("twist"), navigator.GetInputPort("twist"))
-    builder.Connect(lidar.GetOutputPort("scan"), navigator.GetInputPort("scan"))
-    builder.Connect(navigator.GetOutputPort("cmd_vel"), controller.GetInputPort("command"))
+    builder.Connect(robot_parts.odometry_twist, navigator.GetInputPort("twist"))
+    builder.Connect(robot_parts.scan, navigator.GetInputPort("scan"))
+    builder.Connect(navigator.GetOutputPort("cmd_vel"), robot_parts.cmd_vel)
 
     for name, port in (
-        ("true_pose", truth.get_output_port()),
-        ("odometry_pose", odometry.GetOutputPort("pose")),
+        ("true_pose", robot_parts.true_pose),
+        ("odometry_pose", robot_parts.odometry_pose),
         ("estimated_pose", amcl.GetOutputPort("pose")),
         ("covariance", amcl.GetOutputPort("covariance")),
         ("particles", amcl.GetOutputPort("particles")),
-        ("scan", lidar.GetOutputPort("scan")),
+        ("scan", robot_parts.scan),
         ("cmd_vel", navigator.GetOutputPort("cmd_vel")),
         ("navigation_status", navigator.GetOutputPort("status")),
     ):
         builder.ExportOutput(port, name)
     for name, port in (
-        ("log_true_pose", truth.get_output_port()),
+        ("log_true_pose", robot_parts.true_pose),
         ("log_estimated_pose", amcl.GetOutputPort("pose")),
     ):
         LogVectorOutput(port, builder, scenario.log_period).set_name(name)
     if meshcat is not None:
-        _add_views(builder, scene_graph, meshcat, scenario, occupancy_map, amcl, navigator, truth)
+        _add_views(builder, meshcat, scenario, occupancy_map, robot_parts, amcl, navigator)
     diagram = builder.Build()
     diagram.set_name("navigation")
     return diagram
 
 
-def _add_views(builder, scene_graph, meshcat, scenario, occupancy_map, amcl, navigator, truth):
+def _add_views(builder, meshcat, scenario, occupancy_map, robot_parts, amcl, navigator):
     """The robot and arena, the map and costmap, the particles and the paths, the trails."""
     MeshcatVisualizer.AddToBuilder(
-        builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)
+        builder, robot_parts.scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)
     )
     view = builder.AddNamedSystem(
         "navigation_view",
@@ -176,4 +130,4 @@ def _add_views(builder, scene_graph, meshcat, scenario, occupancy_map, amcl, nav
         "trails", TrailVisualizer(meshcat=meshcat, period=scenario.view_period)
     )
     builder.Connect(amcl.GetOutputPort("pose"), trails.GetInputPort("odometry_pose"))
-    builder.Connect(truth.get_output_port(), trails.GetInputPort("true_pose"))
+    builder.Connect(robot_parts.true_pose, trails.GetInputPort("true_pose"))

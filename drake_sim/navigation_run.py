@@ -23,7 +23,8 @@ from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
 
-from diagrams.navigation import ROBOT_NAME, make_navigation_diagram
+from diagrams.lidar_robot import ROBOT_NAME
+from diagrams.navigation import make_navigation_diagram
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base import cli
 from drake_sim.base.map_files import OccupancyMap

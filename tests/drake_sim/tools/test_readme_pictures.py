@@ -58,7 +58,7 @@ def test_pickplace_hook_waits_for_its_module(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(mut, "PICKPLACE_GIF", spec)
     assert mut.make_pickplace_gif(tmp_path) == []
     assert "does not exist yet" in capsys.readouterr().out
-    assert set(mut.PICTURES) == {"flip", "diagrams", "pickplace", "walle", "mapping"}
+    assert set(mut.PICTURES) == {"flip", "diagrams", "pickplace", "walle", "mapping", "navigation"}
 
 
 def test_record_replay_reports_a_failed_run(tmp_path):

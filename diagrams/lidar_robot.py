@@ -1,0 +1,121 @@
+"""The lidar robot in its arena, as both the mapping and the navigation diagrams need it: the
+plant with the arena and the TurtleBot3 at its start, the diff-drive controller on ``cmd_vel``,
+the encoder odometry, the true pose and the lidar.
+
+``add_lidar_robot`` adds them to a builder; the caller connects ``cmd_vel`` and adds what uses
+the scan (SLAM, or AMCL and the navigator).
+"""
+
+import dataclasses as dc
+
+import numpy as np
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.systems.framework import DiagramBuilder, InputPort, OutputPort
+from pydrake.systems.primitives import MatrixGain
+
+from drake_sim.robots.turtlebot3 import (
+    BASE_FOOTPRINT,
+    LIDAR_FRAME,
+    add_turtlebot3,
+    drive_limits,
+    start_pose,
+    wheel_state_selector,
+)
+from drake_sim.robots.turtlebot3_params import Turtlebot3Params
+from drake_sim.systems.control.diff_drive_controller import DiffDriveConfig, DiffDriveController
+from drake_sim.systems.estimation.encoder_odometry import (
+    EncoderOdometry,
+    EncoderOdometryConfig,
+    PlanarGroundTruth,
+)
+from drake_sim.systems.sensors.lidar import LidarConfig, add_lidar
+from drake_sim.worlds.arena import Arena
+from drake_sim.worlds.arena_world import add_arena
+
+ROBOT_NAME = "turtlebot3"
+
+
+@dc.dataclass
+class LidarRobotParts:
+    """What ``add_lidar_robot`` added: the plant and its scene graph, and the ports the rest of
+    a diagram connects to."""
+
+    plant: MultibodyPlant
+    scene_graph: object
+    cmd_vel: InputPort  # [v, omega] m/s, rad/s: the DiffDriveController's command.
+    true_pose: OutputPort  # [x, y, yaw] of base_footprint (m, m, rad): the truth.
+    odometry_pose: OutputPort  # [x, y, yaw] from the wheel encoders.
+    odometry_twist: OutputPort  # [v, omega] from the wheel encoders.
+    scan: OutputPort  # LaserScan.
+    X_base_sensor: tuple[float, float, float]  # The lidar's planar pose on the base.
+
+
+def add_lidar_robot(
+    builder: DiagramBuilder,
+    *,
+    plant_config: MultibodyPlantConfig,
+    robot: Turtlebot3Params,
+    world: Arena,
+    start,
+    lidar: LidarConfig,
+    odometry: EncoderOdometryConfig,
+    drive_rate: float,
+    seed: int,
+) -> LidarRobotParts:
+    """Adds the arena ``world`` and the robot standing at ``start`` (``[x, y, yaw]``, m, m, rad)
+    with its controller (at ``drive_rate`` Hz, the robot's own limits), odometry (starting at
+    ``start``), true pose and lidar (noise and odometry errors drawn from ``seed``). Systems are
+    named ``plant``, ``scene_graph``, ``wheel_state``, ``diff_drive``, ``odometry``,
+    ``true_pose`` and ``lidar``."""
+    plant, scene_graph = AddMultibodyPlant(plant_config, builder)
+    add_arena(plant, world)
+    instance = add_turtlebot3(plant, robot, name=ROBOT_NAME)
+    plant.Finalize()
+    start = np.asarray(start, dtype=float)
+    base = plant.GetBodyByName(BASE_FOOTPRINT, instance)
+    plant.SetDefaultFloatingBaseBodyPose(base, start_pose(*start))
+
+    wheels = builder.AddNamedSystem(
+        "wheel_state", MatrixGain(wheel_state_selector(plant, instance))
+    )
+    builder.Connect(plant.get_state_output_port(), wheels.get_input_port())
+    drive = DiffDriveConfig(rate=drive_rate, **drive_limits(robot))
+    controller = builder.AddNamedSystem(
+        "diff_drive", DiffDriveController(robot=robot, config=drive, upside_down_aware=False)
+    )
+    builder.Connect(wheels.get_output_port(), controller.GetInputPort("wheel_state"))
+    builder.Connect(
+        controller.GetOutputPort("wheel_torques"), plant.get_actuation_input_port(instance)
+    )
+    encoder_odometry = builder.AddNamedSystem(
+        "odometry",
+        EncoderOdometry(
+            wheel_radius=robot.wheel.radius,
+            wheel_separation=robot.wheel_separation,
+            config=odometry,
+            initial_pose=start,
+            seed=seed,
+        ),
+    )
+    builder.Connect(wheels.get_output_port(), encoder_odometry.GetInputPort("wheel_state"))
+    truth = builder.AddNamedSystem("true_pose", PlanarGroundTruth(plant=plant, body=base))
+    builder.Connect(plant.get_body_poses_output_port(), truth.get_input_port())
+    sensor = add_lidar(
+        builder,
+        plant,
+        scene_graph,
+        frame=plant.GetFrameByName(LIDAR_FRAME, instance),
+        config=lidar,
+        ignore=[instance],
+        seed=seed,
+    )
+    return LidarRobotParts(
+        plant=plant,
+        scene_graph=scene_graph,
+        cmd_vel=controller.GetInputPort("command"),
+        true_pose=truth.get_output_port(),
+        odometry_pose=encoder_odometry.GetOutputPort("pose"),
+        odometry_twist=encoder_odometry.GetOutputPort("twist"),
+        scan=sensor.GetOutputPort("scan"),
+        X_base_sensor=(robot.lidar.x, robot.lidar.y, 0.0),
+    )
