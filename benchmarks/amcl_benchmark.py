@@ -14,6 +14,9 @@ filter (``config/amcl.yaml``) localises on the arena's ground-truth 0.05 m map. 
 * global localisation (particles over all the free space): the time after which the error
   stays under 5 cm and 3 degrees.
 
+The costs include the scan-to-map refinement of the shipped config (``--no-refinement``: the
+filter alone).
+
 Not a test: speeds depend on the machine.
 """
 
@@ -121,12 +124,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--arena", type=Path, action="append", help="default: all shipped")
     parser.add_argument("--seeds", type=int, default=5, help="seeds 1..N per arena")
+    parser.add_argument(
+        "--no-refinement", action="store_true", help="without the scan-to-map refinement"
+    )
     args = parser.parse_args()
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"python {platform.python_version()}, numpy {np.__version__}"
     )
     config = load_amcl_config(default_amcl_config_file())
+    if args.no_refinement:
+        config = dc.replace(config, scan_match_refinement=False)
     fixed = dc.replace(config, min_particles=2000, max_particles=2000)
     covariance = np.diag([0.25, 0.25, math.radians(30) ** 2])
     warm = Scenario(shipped_arenas()[0], 0, 1.0)  # loads the compiled kernel before timing

@@ -28,6 +28,21 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
 * the estimate is ROS's: the weighted mean of the heaviest cluster of particles (bins of the
   histogram above, neighbours joined, yaw wrapping round), with the covariance of the whole
   set (x, y block and the circular variance of yaw).
+* scan-to-map refinement (ours, not ROS's; ``scan_match_refinement``, a common AMCL variant):
+  the filter's estimate is good to a few cm only (particles 1 to 2 cm apart, ROS's weak
+  likelihood), so after each update the scan's end points (up to ``refinement_max_beams`` of
+  the beams in range, in the base frame) are matched against the map from the estimate with
+  ``scan_matcher.match_scan`` (Gauss-Newton, coarse to fine, on likelihood fields built once
+  from the map, ``_match_pyramid``). The match becomes the estimate if it converged (one more
+  step moves less than ``refinement_tolerance``), moved less than the gate
+  (``refinement_max_correction`` m, ``refinement_max_correction_a`` rad) and its end points
+  score at least ``refinement_min_score`` on the finest level; along a corridor (the scan's
+  normals all one way, ``scan_matcher.normal_spread``) the filter's position along it stays.
+  With ``refinement_shift_particles`` the whole set then moves rigidly by the correction
+  (about the old estimate), which keeps its spread, weights and covariance and lets the next
+  update start from the refined pose; without it, the particles stay where the filter put
+  them and a rejected match leaves the filter's bias (measured in the warehouse, navigation to
+  10 goals: worst goal 2.1 cm with the shift, 2.6 to 5.3 cm without).
 
 Deliberate differences from ROS: the update threshold ``update_min_d`` applies to the distance
 moved (ROS compares |dx| and |dy| separately); ``w_avg`` is the expected likelihood of the scan
@@ -38,7 +53,8 @@ particles are all equally bad, so the effective sample size alone would never re
 ROS, ``kld_z`` is used as the normal quantile itself.
 
 Cost (``benchmarks/amcl_benchmark.py``, 2 cores): 1.2 to 1.9 ms median per update with 2000
-particles and 60 beams (the sensor model about 0.4 ms, the clustered estimate 0.5 ms).
+particles and 60 beams (the sensor model about 0.4 ms, the clustered estimate 0.5 ms), plus
+about 1.5 ms for the scan-to-map refinement (180 beams).
 """
 
 import math
@@ -52,6 +68,13 @@ from scipy.sparse.csgraph import connected_components
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
+from drake_sim.systems.estimation.scan_matcher import (
+    MatchMap,
+    MatchResult,
+    match_scan,
+    normal_spread,
+    transform_points,
+)
 
 if TYPE_CHECKING:  # the parameters live with the system, which imports this module
     from drake_sim.systems.estimation.amcl import AmclConfig
@@ -80,6 +103,9 @@ class ParticleFilter:
     Attributes:
         particles: (n, 3) poses [x, y, yaw] (m, m, rad) in the map's world frame.
         weights: (n,) normalised weights.
+        refinements: [accepted, rejected] scan-to-map refinements so far.
+        last_match: the last refinement's ``MatchResult`` (base pose in the map's own frame),
+            None before the first.
     """
 
     def __init__(self, occupancy_map: OccupancyMap, config: "AmclConfig", seed=0):
@@ -87,6 +113,11 @@ class ParticleFilter:
         self.map = occupancy_map
         self._rng = np.random.default_rng(seed)
         self._field = _likelihood_table(occupancy_map, self.config)
+        self._pyramid = (
+            _match_pyramid(occupancy_map, config) if config.scan_match_refinement else []
+        )
+        self.last_match: MatchResult | None = None  # The last refinement's match, if any.
+        self.refinements = [0, 0]  # Refinements [accepted, rejected] so far.
         free_rows, free_cols = np.nonzero(occupancy_map.free())
         self._free_cells = np.stack([free_cols, free_rows], -1).astype(float)
         self._odom = None  # odometry [x, y, yaw] at the last update; None: take the next one's
@@ -102,6 +133,7 @@ class ParticleFilter:
         other._rng = np.random.default_rng()
         other._rng.bit_generator.state = self._rng.bit_generator.state
         other.particles, other.weights = self.particles.copy(), self.weights.copy()
+        other.refinements = list(self.refinements)
         if self._odom is not None:
             other._odom = self._odom.copy()
         return other
@@ -176,6 +208,14 @@ class ParticleFilter:
         self._odom, self._force = odom.copy(), False
         self.updates += 1
         self._estimate = _estimate(self.particles, self.weights)
+        if self._pyramid:
+            self._refine(
+                np.asarray(ranges, dtype=float),
+                np.asarray(angles, dtype=float),
+                float(range_max),
+                float(range_min),
+                np.asarray(X_base_sensor, dtype=float),
+            )
         return True
 
     def estimate(self) -> tuple[np.ndarray, np.ndarray]:
@@ -258,6 +298,54 @@ class ParticleFilter:
         else:
             self._w_slow += c.recovery_alpha_slow * (w_avg - self._w_slow)
             self._w_fast += c.recovery_alpha_fast * (w_avg - self._w_fast)
+
+    def _refine(self, ranges, angles, range_max, range_min, sensor) -> None:
+        """Scan-to-map refinement (ours, not ROS's): matches the scan's end points against
+        the map from the filter's estimate and, if the match is good, takes it as the
+        estimate (and moves the particles with it when ``refinement_shift_particles``)."""
+        c = self.config
+        if c.laser_max_range > 0:
+            range_max = min(range_max, c.laser_max_range)
+        if c.laser_min_range > 0:
+            range_min = max(range_min, c.laser_min_range)
+        hit = np.isfinite(ranges) & (ranges < range_max) & (ranges > range_min)
+        if hit.sum() < c.refinement_min_points:
+            self.refinements[1] += 1
+            return
+        r, a = ranges[hit], angles[hit]
+        if len(r) > c.refinement_max_beams:  # evenly spread
+            keep = np.unique(np.linspace(0, len(r) - 1, c.refinement_max_beams).round())
+            r, a = r[keep.astype(int)], a[keep.astype(int)]
+        points = np.stack(
+            [sensor[0] + r * np.cos(sensor[2] + a), sensor[1] + r * np.sin(sensor[2] + a)], -1
+        )
+        pose, covariance = self._estimate
+        start = _relative(self.map.origin, pose)  # matching runs in the map's own frame
+        result = match_scan(self._pyramid, points, start, iterations=c.refinement_iterations)
+        self.last_match = result
+        refined = result.pose
+        values, vectors = normal_spread(points)
+        if not (values[1] > 0 and values[0] >= c.refinement_degenerate_ratio * values[1]):
+            # Surfaces all facing one way (a corridor): keep the filter's position along them.
+            along = transform_points((0.0, 0.0, refined[2]), vectors[:, 0][None, :])[0]
+            refined = refined.copy()
+            refined[:2] -= along * (along @ (refined[:2] - start[:2]))
+        offset = _relative(start, refined)
+        if (
+            math.hypot(offset[0], offset[1]) > c.refinement_max_correction
+            or abs(offset[2]) > c.refinement_max_correction_a
+            or result.scores[0] < c.refinement_min_score
+            or not _converged(self._pyramid[0], points, result.pose, c.refinement_tolerance)
+        ):
+            self.refinements[1] += 1
+            return
+        self.refinements[0] += 1
+        new_pose = _compose(self.map.origin, refined)
+        if c.refinement_shift_particles:
+            # The rigid motion taking the old estimate to the new one, applied to every particle.
+            moved = _relative(pose, self.particles.T).T
+            self.particles = _compose(new_pose, moved.T).T
+        self._estimate = (new_pose, covariance)
 
     def _degenerate(self) -> bool:
         """True unless selective resampling finds the effective sample size large enough (and
@@ -412,6 +500,97 @@ def _likelihood_table(occupancy_map: OccupancyMap, config: "AmclConfig"):
         distance = np.full(occupied.shape, cap)
     d = np.append(distance.ravel(), cap)
     return np.exp(-(d * d) / (2.0 * config.laser_sigma_hit**2)), occupancy_map.resolution
+
+
+def _match_pyramid(occupancy_map: OccupancyMap, config: "AmclConfig") -> list[MatchMap]:
+    """The likelihood-field ``MatchMap`` levels of the map, finest first, in the map's own
+    frame (origin (0, 0), no rotation).
+
+    Level k of ``refinement_levels`` has cells of resolution * 2^k, a cell occupied where any
+    of its block is, and values exp(-d^2 / (2 s^2)), d the distance (cells) to the nearest
+    occupied cell and s = ``refinement_field`` cells. With ``refinement_subdivision`` n > 1 a
+    finer level (cells of resolution / n) comes first, whose field peaks on the boundary
+    between the map's occupied and free cells (d: the distance to the fine occupied cells
+    touching a free one) rather than on the occupied cells' centres: the map marks a cell
+    occupied when its centre is inside an obstacle, so an obstacle's face is on average on
+    that boundary, while the centres lie half a cell inside it (a bias of up to 2.5 cm with
+    0.05 m cells where most beams hit walls on one side)."""
+    occupied = occupancy_map.occupied()
+    known = ~occupancy_map.unknown()
+    levels = []
+    n = config.refinement_subdivision
+    if n > 1:
+        fine = np.kron(occupied, np.ones((n, n), bool))
+        free = ~fine
+        touching = np.zeros_like(fine)
+        touching[1:] |= free[:-1]
+        touching[:-1] |= free[1:]
+        touching[:, 1:] |= free[:, :-1]
+        touching[:, :-1] |= free[:, 1:]
+        surface = fine & touching
+        seen = ndimage.binary_dilation(np.kron(known, np.ones((n, n), bool)), np.ones((3, 3), bool))
+        levels.append(
+            _field_level(surface, seen, occupancy_map.resolution / n, n * config.refinement_field)
+        )
+    for k in range(config.refinement_levels):
+        block = 2**k
+        rows = -(-occupied.shape[0] // block) * block
+        cols = -(-occupied.shape[1] // block) * block
+        shape = (rows // block, block, cols // block, block)
+        occ = np.zeros((rows, cols), bool)
+        occ[: occupied.shape[0], : occupied.shape[1]] = occupied
+        seen = np.zeros((rows, cols), bool)
+        seen[: known.shape[0], : known.shape[1]] = known
+        occ, seen = occ.reshape(shape).any(axis=(1, 3)), seen.reshape(shape).any(axis=(1, 3))
+        seen = ndimage.binary_dilation(seen, np.ones((3, 3), bool))
+        levels.append(
+            _field_level(occ, seen, occupancy_map.resolution * block, config.refinement_field)
+        )
+    return levels
+
+
+def _field_level(occupied, seen, resolution, width) -> MatchMap:
+    """A ``MatchMap`` of exp(-d^2 / (2 width^2)), d (cells) to the nearest occupied cell."""
+    if occupied.any():
+        distance = ndimage.distance_transform_edt(~occupied)
+        values = np.exp(-0.5 * (distance / width) ** 2)
+    else:
+        values = np.zeros(occupied.shape)
+    return MatchMap(values, resolution, (0.0, 0.0), seen)
+
+
+def _converged(match_map: MatchMap, points, pose, tolerance: float) -> bool:
+    """Whether one more Gauss-Newton step of ``match_scan``'s cost (without a prior) on
+    ``match_map`` from ``pose`` would move less than ``tolerance`` (m and rad)."""
+    world = transform_points(pose, points)
+    value, grad = match_map.interpolate(world)
+    w = match_map.is_known(world).astype(float)
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    d_yaw = grad[:, 0] * (-s * points[:, 0] - c * points[:, 1]) + grad[:, 1] * (
+        c * points[:, 0] - s * points[:, 1]
+    )
+    jacobian = np.stack([grad[:, 0], grad[:, 1], d_yaw], -1)
+    weighted = jacobian * w[:, None]
+    try:
+        step = np.linalg.solve(weighted.T @ jacobian, weighted.T @ (1.0 - value))
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.all(np.isfinite(step)) and np.abs(step).max() < tolerance)
+
+
+def _compose(a, b) -> np.ndarray:
+    """Pose(s) ``b`` (3,) or (3, n), given in the frame of pose ``a`` (3,), in a's parent."""
+    b = np.asarray(b, dtype=float)
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return np.stack([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2])], 0)
+
+
+def _relative(a, b) -> np.ndarray:
+    """Pose(s) ``b`` (3,) or (3, n) expressed in the frame of pose ``a`` (3,)."""
+    b = np.asarray(b, dtype=float)
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap(b[2] - a[2])], 0)
 
 
 def _check_pose(pose, covariance) -> tuple[np.ndarray, np.ndarray]:

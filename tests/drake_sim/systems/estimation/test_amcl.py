@@ -211,6 +211,15 @@ def test_bad_arguments_are_config_errors():
         ("odom_alpha3", -1.0, "non-negative"),
         ("odom_model_type", "omni", "diff-corrected"),
         ("laser_model_type", "beam", "likelihood_field"),
+        ("refinement_max_correction", 0.0, "positive"),
+        ("refinement_max_correction_a", -0.1, "positive"),
+        ("refinement_field", 0.0, "positive"),
+        ("refinement_tolerance", float("inf"), "finite"),
+        ("refinement_min_score", 1.5, "in [0, 1]"),
+        ("refinement_degenerate_ratio", -0.1, "in [0, 1]"),
+        ("refinement_min_points", 2, "at least 3"),
+        ("refinement_levels", 0, "at least 1"),
+        ("refinement_iterations", 0, "at least 1"),
     ],
 )
 def test_bad_values_name_the_key(key, value, words):
@@ -248,4 +257,6 @@ def test_defaults_are_ros_amcl_and_the_shipped_file_loads():
     assert (ros.laser_sigma_hit, ros.laser_likelihood_max_dist) == (0.2, 2.0)
     assert ros.odom_alpha1 == ros.odom_alpha4 == 0.2 and ros.recovery_alpha_slow == 0.0
     assert shipped.max_particles == 8000 and shipped.laser_max_beams == 90
+    # The scan-to-map refinement is ours: off by default (ROS's filter), on in the shipped file.
+    assert not ros.scan_match_refinement and shipped.scan_match_refinement
     np.testing.assert_allclose(np.diag(shipped.initial_covariance()), [0.25, 0.25, 0.2742])

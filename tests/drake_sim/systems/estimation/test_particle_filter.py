@@ -329,3 +329,71 @@ def test_bad_initial_poses_are_config_errors():
         dut.set_pose([0.0, 0.0, 0.0], -np.eye(3))
     with pytest.raises(ConfigError, match="symmetric"):
         dut.set_pose([0.0, 0.0, 0.0], np.triu(np.ones((3, 3))))
+
+
+REFINED = AmclConfig(
+    min_particles=500, max_particles=500, laser_max_beams=90, scan_match_refinement=True
+)
+
+
+def one_update(name, config, truth, offset, *, ranges=None):
+    """A filter whose particles all sit at ``truth + offset`` takes one scan made at ``truth``
+    (or ``ranges``); returns the filter."""
+    _, footprints, grid, _ = world(name)
+    dut = mut.ParticleFilter(grid, config, 0)
+    dut.set_pose(np.asarray(truth) + offset, np.diag([1e-8, 1e-8, 1e-10]))
+    if ranges is None:
+        ranges = scan_at(footprints, truth, np.random.default_rng(0))
+    assert dut.update(
+        truth, ranges, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR
+    )
+    return dut
+
+
+@pytest.mark.parametrize("name, truth", [("maze", [0.3, 0.2, 0.4]), ("room", [-2.2, -1.8, 0.0])])
+def test_scan_match_refinement_corrects_a_biased_estimate(name, truth):
+    offset = np.array([0.04, -0.03, math.radians(1.5)])
+    plain = one_update(name, dc.replace(REFINED, scan_match_refinement=False), truth, offset)
+    estimate, _ = plain.estimate()
+    assert math.dist(estimate[:2], truth[:2]) > 0.045  # the filter alone keeps the bias
+    dut = one_update(name, dc.replace(REFINED, refinement_shift_particles=False), truth, offset)
+    estimate, covariance = dut.estimate()
+    assert dut.refinements == [1, 0]
+    assert math.dist(estimate[:2], truth[:2]) < 0.015
+    assert abs(float(mut.wrap(estimate[2] - truth[2]))) < math.radians(0.5)
+    assert dut.last_match.scores[0] > REFINED.refinement_min_score
+    # Only the estimate moved: the particles (and the covariance) are the filter's.
+    np.testing.assert_allclose(dut.particles, plain.particles)
+    np.testing.assert_allclose(covariance, plain.estimate()[1])
+
+
+def test_scan_match_refinement_can_shift_the_particles_with_the_estimate():
+    truth, offset = np.array([0.3, 0.2, 0.4]), np.array([0.04, -0.03, math.radians(1.5)])
+    plain = one_update("maze", dc.replace(REFINED, scan_match_refinement=False), truth, offset)
+    dut = one_update("maze", REFINED, truth, offset)
+    estimate, covariance = dut.estimate()
+    assert dut.refinements == [1, 0] and REFINED.refinement_shift_particles
+    np.testing.assert_allclose(dut.particles.mean(axis=0), estimate, atol=1e-3)
+    # A rigid move: the spread (and the covariance) is the filter's.
+    np.testing.assert_allclose(covariance, plain.estimate()[1], rtol=1e-6, atol=1e-12)
+
+
+def test_scan_match_refinement_rejects_bad_matches():
+    truth = np.array([0.3, 0.2, 0.4])
+    offset = np.array([0.04, -0.03, math.radians(1.5)])
+    # A correction beyond the gate: the filter's estimate stands.
+    gated = dc.replace(REFINED, refinement_max_correction=0.02)
+    dut = one_update("maze", gated, truth, offset)
+    assert dut.refinements == [0, 1]
+    np.testing.assert_allclose(dut.estimate()[0], truth + offset, atol=1e-3)
+    # A scan of somewhere else: no good match near the estimate.
+    _, footprints, _, _ = world("maze")
+    elsewhere = scan_at(footprints, truth + [0.0, 0.0, 2.0], np.random.default_rng(0))
+    dut = one_update("maze", REFINED, truth, offset, ranges=elsewhere)
+    assert dut.refinements == [0, 1]
+    np.testing.assert_allclose(dut.estimate()[0], truth + offset, atol=1e-3)
+    # Too few returns to match.
+    few = np.full(360, np.inf)
+    few[:10] = 1.0
+    dut = one_update("maze", REFINED, truth, offset, ranges=few)
+    assert dut.refinements == [0, 1]
