@@ -9,7 +9,7 @@ the scan (SLAM, or AMCL and the navigator).
 import dataclasses as dc
 
 import numpy as np
-from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import MatrixGain
 
@@ -23,12 +23,8 @@ from drake_sim.robots.turtlebot3 import (
 )
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.control.diff_drive_controller import DiffDriveConfig, DiffDriveController
-from drake_sim.systems.estimation.encoder_odometry import (
-    EncoderOdometry,
-    EncoderOdometryConfig,
-    PlanarGroundTruth,
-)
-from drake_sim.systems.sensors.lidar import LidarConfig, add_lidar
+from drake_sim.systems.estimation.encoder_odometry import EncoderOdometry, PlanarGroundTruth
+from drake_sim.systems.sensors.lidar import add_lidar
 from drake_sim.worlds.arena import Arena
 from drake_sim.worlds.arena_world import add_arena
 
@@ -51,23 +47,17 @@ class LidarRobotParts:
 
 
 def add_lidar_robot(
-    builder: DiagramBuilder,
-    *,
-    plant_config: MultibodyPlantConfig,
-    robot: Turtlebot3Params,
-    world: Arena,
-    start,
-    lidar: LidarConfig,
-    odometry: EncoderOdometryConfig,
-    drive_rate: float,
-    seed: int,
+    builder: DiagramBuilder, scenario, *, robot: Turtlebot3Params, world: Arena, start
 ) -> LidarRobotParts:
     """Adds the arena ``world`` and the robot standing at ``start`` (``[x, y, yaw]``, m, m, rad)
-    with its controller (at ``drive_rate`` Hz, the robot's own limits), odometry (starting at
-    ``start``), true pose and lidar (noise and odometry errors drawn from ``seed``). Systems are
-    named ``plant``, ``scene_graph``, ``wheel_state``, ``diff_drive``, ``odometry``,
-    ``true_pose`` and ``lidar``."""
-    plant, scene_graph = AddMultibodyPlant(plant_config, builder)
+    with its controller (at ``scenario.drive_rate`` Hz, the robot's own limits), odometry
+    (``scenario.odometry``, starting at ``start``), true pose and lidar (``scenario.lidar``), on
+    a plant of ``scenario.plant``; noise and odometry errors are drawn from
+    ``scenario.random_seed``. ``scenario`` is a ``MappingScenario`` or a ``NavigationScenario``.
+    Systems are named ``plant``, ``scene_graph``, ``wheel_state``, ``diff_drive``,
+    ``odometry``, ``true_pose`` and ``lidar``."""
+    seed = scenario.random_seed
+    plant, scene_graph = AddMultibodyPlant(scenario.plant, builder)
     add_arena(plant, world)
     instance = add_turtlebot3(plant, robot, name=ROBOT_NAME)
     plant.Finalize()
@@ -79,7 +69,7 @@ def add_lidar_robot(
         "wheel_state", MatrixGain(wheel_state_selector(plant, instance))
     )
     builder.Connect(plant.get_state_output_port(), wheels.get_input_port())
-    drive = DiffDriveConfig(rate=drive_rate, **drive_limits(robot))
+    drive = DiffDriveConfig(rate=scenario.drive_rate, **drive_limits(robot))
     controller = builder.AddNamedSystem(
         "diff_drive", DiffDriveController(robot=robot, config=drive, upside_down_aware=False)
     )
@@ -92,7 +82,7 @@ def add_lidar_robot(
         EncoderOdometry(
             wheel_radius=robot.wheel.radius,
             wheel_separation=robot.wheel_separation,
-            config=odometry,
+            config=scenario.odometry,
             initial_pose=start,
             seed=seed,
         ),
@@ -105,7 +95,7 @@ def add_lidar_robot(
         plant,
         scene_graph,
         frame=plant.GetFrameByName(LIDAR_FRAME, instance),
-        config=lidar,
+        config=scenario.lidar,
         ignore=[instance],
         seed=seed,
     )

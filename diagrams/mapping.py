@@ -45,17 +45,7 @@ def make_mapping_diagram(
     """
     builder = DiagramBuilder()
     start = np.array(arena.start_pose())
-    robot_parts = add_lidar_robot(
-        builder,
-        plant_config=scenario.plant,
-        robot=robot,
-        world=arena,
-        start=start,
-        lidar=scenario.lidar,
-        odometry=scenario.odometry,
-        drive_rate=scenario.drive_rate,
-        seed=scenario.random_seed,
-    )
+    robot_parts = add_lidar_robot(builder, scenario, robot=robot, world=arena, start=start)
     X_base_sensor = robot_parts.X_base_sensor
     slam = builder.AddNamedSystem(
         "slam",

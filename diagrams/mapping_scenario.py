@@ -8,7 +8,7 @@ from pathlib import Path
 
 from pydrake.multibody.plant import MultibodyPlantConfig
 
-from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.control.route_follower import (
@@ -89,6 +89,6 @@ def load_mapping_scenario(filename, *, defaults=None) -> MappingScenario:
     Raises:
         ConfigError: naming the file and the key at fault.
     """
-    text = read_text(filename, "scenario file")
-    scenario = load_typed(MappingScenario, data=text, defaults=defaults, where=str(filename))
-    return check_mapping_scenario(scenario, str(filename))
+    return load_checked(
+        MappingScenario, filename, check_mapping_scenario, what="scenario file", defaults=defaults
+    )

@@ -51,17 +51,7 @@ def make_navigation_diagram(
     systems are named ``amcl``, ``navigator``, ``lidar`` and ``plant``.
     """
     builder = DiagramBuilder()
-    robot_parts = add_lidar_robot(
-        builder,
-        plant_config=scenario.plant,
-        robot=robot,
-        world=world,
-        start=start,
-        lidar=scenario.lidar,
-        odometry=scenario.odometry,
-        drive_rate=scenario.drive_rate,
-        seed=scenario.random_seed,
-    )
+    robot_parts = add_lidar_robot(builder, scenario, robot=robot, world=world, start=start)
     X_base_sensor = robot_parts.X_base_sensor
     amcl = builder.AddNamedSystem(
         "amcl",

@@ -10,7 +10,7 @@ from pathlib import Path
 from pydrake.multibody.plant import MultibodyPlantConfig
 
 from diagrams.mapping_scenario import config_path
-from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.estimation.amcl import (
@@ -111,6 +111,10 @@ def load_navigation_scenario(filename, *, defaults=None) -> NavigationScenario:
     Raises:
         ConfigError: naming the file and the key at fault.
     """
-    text = read_text(filename, "scenario file")
-    scenario = load_typed(NavigationScenario, data=text, defaults=defaults, where=str(filename))
-    return check_navigation_scenario(scenario, str(filename))
+    return load_checked(
+        NavigationScenario,
+        filename,
+        check_navigation_scenario,
+        what="scenario file",
+        defaults=defaults,
+    )

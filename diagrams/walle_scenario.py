@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from diagrams.walle_balance_scenario import WalleBalanceScenario, check_walle_balance_scenario
-from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.control.balance_controller import CONTROLLERS
@@ -84,9 +84,9 @@ def load_walle_scenario(filename, *, defaults=None) -> WalleScenario:
     Raises:
         ConfigError: naming the file and the key at fault.
     """
-    text = read_text(filename, "scenario file")
-    scenario = load_typed(WalleScenario, data=text, defaults=defaults, where=str(filename))
-    return check_walle_scenario(scenario, str(filename))
+    return load_checked(
+        WalleScenario, filename, check_walle_scenario, what="scenario file", defaults=defaults
+    )
 
 
 def default_scenario_file() -> Path:

@@ -89,6 +89,20 @@ def load_typed(schema, *, filename=None, data: str | None = None, defaults=None,
         raise ConfigError(f"{where}: {first}") from None
 
 
+def load_checked(schema, filename, check, *, what: str = "file", defaults=None):
+    """Loads ``filename`` (a ``what``, for the error if it cannot be read) into ``schema`` with
+    ``load_typed`` and returns ``check(value, str(filename))``: the one way robot and scenario
+    files are read (unknown keys are errors; missing keys keep ``defaults``, the schema's own
+    when None).
+
+    Raises:
+        ConfigError: naming the file and the key at fault.
+    """
+    where = str(filename)
+    value = load_typed(schema, data=read_text(filename, what), defaults=defaults, where=where)
+    return check(value, where)
+
+
 def apply_overrides(schema, value, overrides, where: str = "--set"):
     """Applies ``KEY=VALUE`` overrides (dotted keys, YAML values) to ``value`` of ``schema``.
 

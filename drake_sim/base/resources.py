@@ -14,6 +14,7 @@ import hashlib
 import os
 from pathlib import Path
 
+import yaml
 from pydrake.multibody.parsing import Parser
 
 PACKAGE_NAME = "drake_sim_models"
@@ -59,6 +60,18 @@ def resolve_uri(uri: str) -> Path:
     if uri.startswith("package://"):
         raise ValueError(f"unknown package in URI {uri!r}; only {prefix} is known")
     return Path(uri)
+
+
+def params_yaml_file(prefix: str, params: dict) -> Path:
+    """``params`` (every optional key filled in) as YAML in the cache, named ``<prefix>-<hash>``:
+    the file a robot's xacro reads with ``xacro.load_yaml``. Written once per content."""
+    text = yaml.safe_dump(params, sort_keys=True)
+    name = f"{prefix}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.yaml"
+    path = cache_dir() / "robot_yaml" / name
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+    return path
 
 
 def make_parser(plant, *, model_name_prefix: str | None = None) -> Parser:

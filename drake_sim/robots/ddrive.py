@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
-import yaml
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from drake_sim.base.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
+from drake_sim.base.resources import (
+    config_dir,
+    make_parser,
+    models_dir,
+    params_yaml_file,
+    render_xacro,
+)
 from drake_sim.robots.ddrive_params import RobotParams
 
 ROBOT_XACRO = "ddrive/ddrive.urdf.xacro"
@@ -31,13 +35,7 @@ def robot_urdf(params: RobotParams) -> Path:
     The parameters, with every optional key filled in, are written as YAML beside the cache
     and handed to the xacro, which reads them with ``xacro.load_yaml``.
     """
-    text = yaml.safe_dump(params.to_dict(), sort_keys=True)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    yaml_dir = cache_dir() / "robot_yaml"
-    yaml_dir.mkdir(parents=True, exist_ok=True)
-    resolved = yaml_dir / f"ddrive-{digest}.yaml"
-    if not resolved.is_file():
-        resolved.write_text(text)
+    resolved = params_yaml_file("ddrive", params.to_dict())
     return render_xacro(models_dir() / ROBOT_XACRO, {"robot_config": str(resolved)})
 
 

@@ -8,16 +8,20 @@ See ``models/turtlebot3/turtlebot3.urdf.xacro`` for the frames. The plant's free
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
-import yaml
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from drake_sim.base.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
+from drake_sim.base.resources import (
+    config_dir,
+    make_parser,
+    models_dir,
+    params_yaml_file,
+    render_xacro,
+)
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 
 ROBOT_XACRO = "turtlebot3/turtlebot3.urdf.xacro"
@@ -53,17 +57,6 @@ def default_turtlebot3_file() -> Path:
     return config_dir() / "turtlebot3.yaml"
 
 
-def _params_file(params: Turtlebot3Params) -> Path:
-    """The parameters, every optional key filled in, as a YAML file named by its hash."""
-    text = yaml.safe_dump(params.to_dict(), sort_keys=True)
-    name = f"turtlebot3-{hashlib.sha256(text.encode()).hexdigest()[:16]}.yaml"
-    path = cache_dir() / "robot_yaml" / name
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
-    return path
-
-
 def robot_urdf(params: Turtlebot3Params) -> Path:
     """Renders the TurtleBot3's URDF for ``params`` (cached) and returns its path.
 
@@ -71,7 +64,7 @@ def robot_urdf(params: Turtlebot3Params) -> Path:
     them with ``xacro.load_yaml``.
     """
     mappings = {
-        "robot_config": str(_params_file(params)),
+        "robot_config": str(params_yaml_file("turtlebot3", params.to_dict())),
         # Named here so the cache key covers the shared macros too.
         "solid_macros": str(models_dir() / SOLID_MACROS),
     }

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import yaml
 
-from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 
 
@@ -255,9 +255,7 @@ def load_turtlebot3_params(filename: str | Path) -> Turtlebot3Params:
         ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
             that is not a finite number, is out of range or gives an impossible robot.
     """
-    name = str(filename)
-    text = read_text(filename, "robot file")
-    return validate(load_typed(Turtlebot3Params, data=text, where=name), name)
+    return load_checked(Turtlebot3Params, filename, validate, what="robot file")
 
 
 def write_turtlebot3_params(params: Turtlebot3Params, filename: str | Path) -> None:

@@ -20,11 +20,9 @@ their sum. Drake's ``Linearize`` about upright at rest gives ``x_dot = A x + B t
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
-import yaml
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import (
@@ -37,7 +35,13 @@ from pydrake.multibody.tree import (
 from pydrake.systems.framework import OutputPortSelection
 from pydrake.systems.primitives import Linearize
 
-from drake_sim.base.resources import cache_dir, config_dir, make_parser, models_dir, render_xacro
+from drake_sim.base.resources import (
+    config_dir,
+    make_parser,
+    models_dir,
+    params_yaml_file,
+    render_xacro,
+)
 from drake_sim.robots.walle_params import WalleParams
 
 ROBOT_XACRO = "walle/walle.urdf.xacro"
@@ -68,17 +72,6 @@ def default_robot_file() -> Path:
     return config_dir() / "walle.yaml"
 
 
-def _params_file(params: WalleParams) -> Path:
-    """The parameters, every optional key filled in, as a YAML file named by its hash."""
-    text = yaml.safe_dump(params.to_dict(), sort_keys=True)
-    name = f"walle-{hashlib.sha256(text.encode()).hexdigest()[:16]}.yaml"
-    path = cache_dir() / "robot_yaml" / name
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
-    return path
-
-
 def robot_urdf(params: WalleParams, *, support: bool = False) -> Path:
     """Renders Wall-E's URDF for ``params`` (cached) and returns its path.
 
@@ -88,7 +81,7 @@ def robot_urdf(params: WalleParams, *, support: bool = False) -> Path:
         support: the "follow" variant, with support casters front and rear.
     """
     mappings = {
-        "robot_config": str(_params_file(params)),
+        "robot_config": str(params_yaml_file("walle", params.to_dict())),
         "support": "true" if support else "false",
         # Named here so the cache key covers the shared macros too.
         "solid_macros": str(models_dir() / SOLID_MACROS),

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-from drake_sim.base.config import load_typed, read_text
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.ddrive_params import MotorParams, WheelParams  # The same parts.
 
@@ -212,9 +212,7 @@ def load_walle_params(filename: str | Path) -> WalleParams:
         ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
             that is not a finite number, is out of range or gives an impossible robot.
     """
-    name = str(filename)
-    text = read_text(filename, "robot file")
-    return validate(load_typed(WalleParams, data=text, where=name), name)
+    return load_checked(WalleParams, filename, validate, what="robot file")
 
 
 def write_walle_params(params: WalleParams, filename: str | Path) -> None:

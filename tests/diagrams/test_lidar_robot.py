@@ -15,17 +15,8 @@ def test_the_robot_drives_on_cmd_vel_and_reports_truth_odometry_and_scans():
     scenario = MappingScenario()
     start = np.array(arena.start_pose())
     builder = DiagramBuilder()
-    dut = mut.add_lidar_robot(
-        builder,
-        plant_config=scenario.plant,
-        robot=nh.robot(),
-        world=arena,
-        start=start,
-        lidar=scenario.lidar,
-        odometry=scenario.odometry,
-        drive_rate=scenario.drive_rate,
-        seed=1,
-    )
+    scenario.random_seed = 1
+    dut = mut.add_lidar_robot(builder, scenario, robot=nh.robot(), world=arena, start=start)
     command = builder.AddSystem(ConstantVectorSource(np.array([0.2, 0.0])))
     builder.Connect(command.get_output_port(), dut.cmd_vel)
     for name, port in (

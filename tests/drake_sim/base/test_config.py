@@ -106,3 +106,27 @@ def test_overrides_apply_in_order_and_name_the_item():
 def test_check_tree_passes_unknown_schemas_through():
     """A type that is neither a dataclass nor a Drake struct is left to Drake's loader."""
     mut.check_tree(object, {"anything": 1}, "f.yaml")
+
+
+def test_load_checked_reads_types_and_checks_the_file(tmp_path):
+    path = tmp_path / "thing.yaml"
+    path.write_text("rate: 2.5\n")
+    seen = []
+
+    def check(value, where):
+        seen.append(where)
+        if value.rate > 10:
+            raise ConfigError(f"{where}: 'rate' is too large")
+        return value
+
+    assert mut.load_checked(Schema, path, check) == Schema(rate=2.5)
+    assert seen == [str(path)]
+    assert mut.load_checked(Schema, path, check, defaults=Schema(count=7)).count == 7
+    path.write_text("rate: 20.0\n")
+    with pytest.raises(ConfigError, match="thing.yaml: 'rate' is too large"):
+        mut.load_checked(Schema, path, check)
+    with pytest.raises(ConfigError, match="thing file"):
+        mut.load_checked(Schema, tmp_path / "none.yaml", check, what="thing file")
+    path.write_text("colour: red\n")
+    with pytest.raises(ConfigError, match="colour"):
+        mut.load_checked(Schema, path, check)

@@ -2,6 +2,7 @@
 resolves them, and the content-keyed cache of rendered xacro files."""
 
 import pytest
+import yaml
 from pydrake.multibody.plant import MultibodyPlant
 
 import drake_sim.base.resources as mut
@@ -102,3 +103,12 @@ def test_render_xacro_renders_again_when_an_input_changes(cache, xacro_inputs):
     assert sorted(p.name for p in (cache / "xacro").iterdir()) == sorted(
         p.name for p in (first, second, third, fourth)
     )  # no temporary files left behind
+
+
+def test_params_yaml_file_is_written_once_per_content():
+    first = mut.params_yaml_file("robot", {"wheel": {"radius": 0.1}, "mass": 2.0})
+    again = mut.params_yaml_file("robot", {"mass": 2.0, "wheel": {"radius": 0.1}})
+    other = mut.params_yaml_file("robot", {"wheel": {"radius": 0.2}, "mass": 2.0})
+    assert first == again != other
+    assert first.name.startswith("robot-") and first.suffix == ".yaml"
+    assert yaml.safe_load(first.read_text()) == {"wheel": {"radius": 0.1}, "mass": 2.0}
