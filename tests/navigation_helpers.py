@@ -1,14 +1,17 @@
 """Shared by the navigation tests: maps saved from the arenas' ground truth (what a perfect
-mapping run would save), the robot and the scenario."""
+mapping run would save) or by a mapping run, the robot and the scenario."""
 
 import numpy as np
 
+from diagrams import mapping_scenario
 from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
 from drake_sim.base.map_files import OccupancyMap, load_map, save_map
 from drake_sim.base.resources import config_dir
+from drake_sim.mapping_run import MappingRun
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
 from drake_sim.worlds.arena import arena_grid, load_arena
+from drake_sim.worlds.route import default_route_file, load_route
 
 
 def robot():
@@ -28,6 +31,19 @@ def saved_truth_map(name: str, folder) -> tuple[OccupancyMap, object]:
     ``folder`` and loaded back; returns the map and its ``.yaml`` path."""
     truth = arena_grid(load_arena(arena_file(name)), 0.05, height=robot().scan_height)
     _, yaml_file = save_map(truth, folder / name)
+    return load_map(yaml_file), yaml_file
+
+
+def saved_slam_map(name: str, folder, seed: int = 0) -> tuple[OccupancyMap, object]:
+    """The map that mapping the arena ``name`` along its default route saves (as
+    ``python -m drake_sim.mapping`` does), loaded back; returns the map and its ``.yaml`` path."""
+    path = arena_file(name)
+    arena = load_arena(path)
+    waypoints = load_route(default_route_file(path), arena).waypoints
+    scenario = mapping_scenario.load_mapping_scenario(mapping_scenario.default_scenario_file())
+    run = MappingRun(scenario, robot(), arena, waypoints, seed=seed)
+    assert run.run(run.default_duration()) == "route_done"
+    _, yaml_file = run.save_map(folder / name)
     return load_map(yaml_file), yaml_file
 
 

@@ -1,11 +1,20 @@
 """A log-odds occupancy grid built from 2D laser scans, and how to score a map against the truth.
 
 ``LogOddsGrid`` keeps l = log(p / (1 - p)) per cell (0: never seen). Inserting a scan adds
-l_hit = log(p_hit / (1 - p_hit)) to the cell of every beam's end point and l_miss (negative) to
+l_hit = log(p_hit / (1 - p_hit)) to the cell a beam's end point marks and l_miss (negative) to
 every cell the beam crossed before it, once per scan each (a cell both crossed and hit in one
 scan counts as hit, as in hector_slam's update markers); values are clamped so that a cell
 can change its mind after a few scans. Beams without a return (``inf``) clear the space up to
 ``range_max``; NaN beams and beams shorter than ``range_min`` give no information.
+
+Which cell a beam's end point marks is ``hit_offset`` (cells) beyond it, along the beam or along
+the direction given per beam. With 0 (hector_slam's choice) it is the cell holding the end point.
+An end point lies on the obstacle's face, though, and a face often lies on a cell edge (or within
+the range noise of one), so for about half the beams the free cell in front of the face is
+marked and the wall comes out a cell thick on the side it was seen from (measured: a third of a
+SLAM map's occupied cells). With 0.5 along the surface's normal, a hit marks the first cell
+whose centre is behind the face, the cell a ground-truth grid calls occupied (``arena_grid``:
+a cell whose centre is inside an obstacle), whatever the angle the beam met the face at.
 
 Ray tracing is vectorised over the whole scan: every beam is sampled at ``step`` (half a cell)
 from the sensor, the samples turned into cell indices at once and de-duplicated through a stamp
@@ -40,6 +49,8 @@ class LogOddsGrid:
         p_hit: probability a cell holding a beam's end point is occupied, in (0.5, 1).
         p_miss: probability a cell a beam crossed is occupied, in (0, 0.5).
         clamp: log-odds are kept in [-clamp, clamp].
+        hit_offset: a beam's hit goes into the cell holding the point this many cells beyond
+            its end point, in [0, 1) (see the module docstring).
     """
 
     def __init__(
@@ -51,6 +62,7 @@ class LogOddsGrid:
         p_hit: float = 0.7,
         p_miss: float = 0.4,
         clamp: float = 4.0,
+        hit_offset: float = 0.0,
     ):
         if not resolution > 0:
             raise ValueError(f"resolution must be positive, got {resolution}")
@@ -58,6 +70,9 @@ class LogOddsGrid:
             raise ValueError(
                 f"need 0.5 < p_hit < 1, 0 < p_miss < 0.5, clamp > 0 ({p_hit}, {p_miss})"
             )
+        if not 0.0 <= hit_offset < 1.0:
+            raise ValueError(f"hit_offset must be in [0, 1), got {hit_offset}")
+        self.hit_offset = float(hit_offset)
         self.resolution = float(resolution)
         self.origin = (float(origin[0]), float(origin[1]))
         cols, rows = (max(1, math.ceil(s / resolution - 1e-9)) for s in size)
@@ -91,6 +106,7 @@ class LogOddsGrid:
         range_min: float = 0.0,
         max_free_range: float | None = None,
         mask=None,
+        hit_directions=None,
     ) -> None:
         """Adds one scan taken from ``sensor_pose`` (x, y, yaw in the world, m, m, rad).
 
@@ -102,6 +118,9 @@ class LogOddsGrid:
             max_free_range: m; beams clear space up to this distance at most (default
                 ``range_max``).
             mask: optional (n,) booleans, False beams are ignored.
+            hit_directions: optional (n, 2) unit vectors in the sensor frame along which each
+                hit is put ``hit_offset`` cells beyond its end point (default: the beams; a
+                scan matcher passes the surfaces' normals, see ``ScanMatchingSlam``).
         """
         ranges = np.asarray(ranges, dtype=float)
         angles = np.asarray(angles, dtype=float)
@@ -109,6 +128,8 @@ class LogOddsGrid:
         if mask is not None:
             use &= np.asarray(mask, dtype=bool)
         ranges, angles = ranges[use], angles[use]
+        if hit_directions is not None:
+            hit_directions = np.asarray(hit_directions, dtype=float).reshape(-1, 2)[use]
         hit = ranges < range_max
         free_limit = range_max if max_free_range is None else min(max_free_range, range_max)
         # Free space stops half a cell short of a hit, so the hit cell itself is not cleared.
@@ -126,9 +147,17 @@ class LogOddsGrid:
             self._stamp = np.zeros(self.log_odds.size, dtype=np.int32)
             self._is_hit = np.zeros(self.log_odds.size, dtype=bool)
         free_cells = self._unique(self._flat_cells(px[inside], py[inside]))
-        hit_cells = self._unique(
-            self._flat_cells(x + c[hit] * ranges[hit], y + s[hit] * ranges[hit])
-        )
+        hx, hy = x + c[hit] * ranges[hit], y + s[hit] * ranges[hit]
+        if self.hit_offset:  # See the module docstring.
+            if hit_directions is None:
+                dx, dy = c[hit], s[hit]
+            else:
+                u, v = hit_directions[hit].T  # Sensor frame -> world.
+                cy, sy = math.cos(yaw), math.sin(yaw)
+                dx, dy = cy * u - sy * v, sy * u + cy * v
+            hx = hx + self.hit_offset * self.resolution * dx
+            hy = hy + self.hit_offset * self.resolution * dy
+        hit_cells = self._unique(self._flat_cells(hx, hy))
         is_hit = self._is_hit
         is_hit[hit_cells] = True
         free_cells = free_cells[~is_hit[free_cells]]

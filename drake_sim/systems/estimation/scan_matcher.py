@@ -172,6 +172,8 @@ def match_scan(
     prior_weight: Sequence[float] = (0.0, 0.0, 0.0),
     prior_pose=None,
     tolerance: float = 1e-5,
+    hit_directions: np.ndarray | None = None,
+    hit_offset: float = 0.0,
 ) -> MatchResult:
     """Finds the base pose that puts the scan's end points on the map's occupied cells.
 
@@ -183,8 +185,16 @@ def match_scan(
         prior_weight: W's diagonal for (x, y, yaw): m^-2, m^-2, rad^-2.
         prior_pose: xi_0 (default ``initial_pose``).
         tolerance: a level stops once a step moves less than this (m, and rad).
+        hit_directions, hit_offset: where the maps' grids put each hit (``LogOddsGrid``):
+            ``hit_offset`` of a level's cell beyond the end point along the unit vector
+            (n, 2, base frame). Each level reads the points where its grid put them.
     """
     points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if hit_directions is None or not hit_offset:
+        level_points = [points] * len(maps)
+    else:
+        directions = np.asarray(hit_directions, dtype=np.float64).reshape(-1, 2)
+        level_points = [points + hit_offset * m.resolution * directions for m in maps]
     pose = np.array(initial_pose, dtype=np.float64)
     prior = pose.copy() if prior_pose is None else np.array(prior_pose, dtype=np.float64)
     weight = np.diag(np.asarray(prior_weight, dtype=np.float64))
@@ -192,6 +202,7 @@ def match_scan(
         iterations = [iterations] * len(maps)
     steps = 0
     for level in reversed(range(len(maps))):
+        points = level_points[level]
         value, jacobian, w = _linearise(maps[level], points, pose)
         cost = _cost(value, w, pose, prior, weight)
         # Start from the better of the coarser level's result and the prediction (docstring).
@@ -227,12 +238,36 @@ def match_scan(
             steps += 1
             if np.abs(delta).max() < tolerance:
                 break
-    _, jacobian, w = _linearise(maps[0], points, pose)
+    _, jacobian, w = _linearise(maps[0], level_points[0], pose)
     scores = []
-    for match_map in maps:
+    for match_map, points in zip(maps, level_points, strict=True):
         value, _, w_level = _linearise(match_map, points, pose)
         scores.append(float(value @ w_level / len(points)) if w_level.any() else 0.0)
     return MatchResult(pose, (jacobian * w[:, None]).T @ jacobian, np.array(scores), steps)
+
+
+def surface_normals(points: np.ndarray, *, k: int = 3, max_gap: float = 0.5) -> np.ndarray:
+    """Unit normals (n, 2) of the surfaces under a scan's end points, pointing away from the
+    sensor (into the obstacle), from the chord between the points k beams before and after;
+    where that chord is longer than ``max_gap`` m (an edge, a lone point) the beam's own
+    direction stands in.
+
+    Args:
+        points: (n, 2) end points in beam order, in the sensor frame, m.
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    length = np.hypot(points[:, 0], points[:, 1])
+    normals = points / np.maximum(length, 1e-12)[:, None]
+    if len(points) < 2 * k + 1:
+        return normals
+    chord = np.roll(points, -k, axis=0) - np.roll(points, k, axis=0)
+    chord_length = np.hypot(chord[:, 0], chord[:, 1])
+    good = (chord_length > 1e-9) & (chord_length < max_gap)
+    normal = np.stack([-chord[good, 1], chord[good, 0]], -1) / chord_length[good, None]
+    flip = np.sum(normal * points[good], axis=1) < 0
+    normal[flip] = -normal[flip]
+    normals[good] = normal
+    return normals
 
 
 def normal_spread(points: np.ndarray, *, k: int = 3, max_gap: float = 0.5):

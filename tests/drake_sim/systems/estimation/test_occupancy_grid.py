@@ -61,6 +61,32 @@ def test_a_cell_hit_and_crossed_in_one_scan_counts_as_hit_once():
     assert value(dut, 1.01, 0.01) == pytest.approx(dut.l_hit)
 
 
+def wall_on_a_cell_edge(**kwargs) -> mut.LogOddsGrid:
+    """A grid of 10 scans of a wall whose face is the line x = 1 (a cell edge), seen square on
+    with 1 cm range noise: half the end points fall short of the edge."""
+    dut = make_grid(**kwargs)
+    rng = np.random.default_rng(0)
+    angles = np.radians(np.linspace(-10.0, 10.0, 41))
+    for _ in range(10):
+        ranges = 1.0 / np.cos(angles) + rng.normal(0.0, 0.01, angles.shape)
+        dut.insert_scan((0.0, 0.0, 0.0), ranges, angles, 3.5)
+    return dut
+
+
+def test_hits_half_a_cell_beyond_the_end_mark_the_wall_cell_only():
+    # The wall is one cell thick, the cell behind the face (as arena_grid rasterises it).
+    dut = wall_on_a_cell_edge(hit_offset=0.5)
+    for y in np.arange(-0.15, 0.16, 0.05):
+        assert value(dut, 1.01, y) > 0, y  # the wall's cell: occupied
+        assert value(dut, 0.99, y) < 0, y  # the free cell in front of it: free
+
+
+def test_hits_in_the_end_cell_thicken_a_wall_on_a_cell_edge():
+    dut = wall_on_a_cell_edge()  # hector_slam's marking, what the scan matcher reads
+    in_front = [value(dut, 0.99, y) for y in np.arange(-0.15, 0.16, 0.05)]
+    assert np.mean(np.array(in_front) > 0) > 0.5
+
+
 def test_log_odds_are_clamped():
     dut = make_grid(clamp=2.0)
     for _ in range(10):
@@ -95,7 +121,14 @@ def test_to_occupancy_map_is_trinary_and_cropped():
 
 @pytest.mark.parametrize(
     "kwargs",
-    [dict(resolution=0.0), dict(p_hit=0.5), dict(p_miss=0.6), dict(clamp=0.0)],
+    [
+        dict(resolution=0.0),
+        dict(p_hit=0.5),
+        dict(p_miss=0.6),
+        dict(clamp=0.0),
+        dict(hit_offset=1.0),
+        dict(hit_offset=-0.1),
+    ],
 )
 def test_bad_parameters(kwargs):
     args = dict(resolution=0.05, size=(1.0, 1.0), origin=(0.0, 0.0)) | kwargs

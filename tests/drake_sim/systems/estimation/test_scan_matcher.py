@@ -166,3 +166,45 @@ def test_unknown_cells_do_not_weigh():
     np.testing.assert_array_equal(dut.is_known(points), [True, False, False])
     _, _, weights = mut._linearise(dut, points, np.zeros(3))
     np.testing.assert_allclose(weights, [3.0, 0.0, 0.0])  # the known point carries them all
+
+
+def test_surface_normals_point_into_the_surfaces():
+    wall = np.stack([np.full(21, 1.0), np.linspace(-0.5, 0.5, 21)], -1)  # the line x = 1
+    # (A scan is a ring: the first and last points pair with each other's neighbours.)
+    np.testing.assert_allclose(mut.surface_normals(wall)[3:-3], [[1.0, 0.0]] * 15, atol=1e-12)
+    angles = np.linspace(0.0, 1.0, 30)
+    ring = 2.0 * np.stack([np.cos(angles), np.sin(angles)], -1)  # a circle round the sensor
+    normals = mut.surface_normals(ring)
+    np.testing.assert_allclose(normals[3:-3], ring[3:-3] / 2.0, atol=1e-3)
+    lone = np.array([[1.0, 0.0], [0.0, 3.0], [-2.0, 0.0], [0.0, -1.5]] * 3)  # far apart
+    np.testing.assert_allclose(mut.surface_normals(lone), lone / np.hypot(*lone.T)[:, None])
+
+
+def test_levels_are_read_where_their_grids_put_the_hits():
+    # Grids that put each hit half a cell beyond the end along the surface's normal, read at
+    # the same points: the pose is recovered as well as with hector's end cells.
+    world = helpers.room()
+    poses = helpers.drive(helpers.ROOM_ROUTE, helpers.ROOM_START)[::10]
+    ranges, angles = helpers.lidar_scans(world, poses, seed=0)
+    grids = [
+        LogOddsGrid(resolution=0.025 * 2**k, size=(16.0, 12.0), origin=(-8.0, -6.0), hit_offset=0.5)
+        for k in range(4)
+    ]
+    for pose, scan in zip(poses, ranges, strict=True):
+        hit = np.isfinite(scan)
+        normals = np.stack([np.cos(angles), np.sin(angles)], -1)
+        normals[hit] = mut.surface_normals(scan[hit, None] * normals[hit])
+        for grid in grids:
+            grid.insert_scan(pose, scan, angles, 3.5, hit_directions=normals)
+    maps = [mut.MatchMap.from_grid(grid, field=1.0) for grid in grids]
+    for pose in [(-2.0, -2.0, 0.3), (1.0, 1.5, 2.0), (2.5, 0.0, -1.2)]:
+        points = end_points(world, pose)
+        start = np.array(pose) + [0.07, -0.05, math.radians(3.0)]
+        kwargs = dict(iterations=[6, 4, 4, 4], hit_offset=0.5)
+        result = mut.match_scan(maps, points, start, **kwargs)  # without: read at the ends
+        shifted = mut.match_scan(
+            maps, points, start, hit_directions=mut.surface_normals(points), **kwargs
+        )
+        error = math.hypot(*(shifted.pose[:2] - pose[:2]))
+        assert error < 0.01 and abs(math.degrees(shifted.pose[2] - pose[2])) < 0.3
+        assert result.scores[0] < shifted.scores[0]  # the ends sit half a cell off the peaks

@@ -57,6 +57,43 @@ def test_the_map_matches_the_room(room_run):
     assert result.width_m < 10.0 and result.height_m < 8.0  # cropped to what was seen
 
 
+def occupied_precision(occupancy_map, truth) -> float:
+    """The fraction of the map's occupied cells that are occupied in ``truth`` (same grid)."""
+    rows, cols = np.nonzero(occupancy_map.cells == 100)
+    x = occupancy_map.origin[0] + (cols + 0.5) * occupancy_map.resolution
+    y = occupancy_map.origin[1] + (rows + 0.5) * occupancy_map.resolution
+    j = np.floor((x - truth.origin[0]) / truth.resolution).astype(int)
+    i = np.floor((y - truth.origin[1]) / truth.resolution).astype(int)
+    return float(np.mean(truth.cells[i, j] == 100))
+
+
+def test_walls_are_drawn_where_the_truth_has_them():
+    # Hits half a cell beyond the end along the surface's normal (the default) draw each wall
+    # one cell thick, behind its face; hector's end cells draw the faces on cell edges two
+    # cells thick (and the pose slides across them).
+    truth = helpers.room().truth(0.05)
+    precision = {}
+    for offset in (0.5, 0.0):
+        config = dc.replace(mut.SlamConfig(), hit_offset=offset)
+        dut = run(helpers.room(), helpers.ROOM_ROUTE, helpers.ROOM_START, seed=7, config=config)[0]
+        precision[offset] = occupied_precision(dut.map(), truth)
+    assert precision[0.5] >= 0.85 and precision[0.0] < 0.75, precision
+
+
+def test_returns_near_the_range_limit_count_as_none():
+    angles = np.radians(np.linspace(-20.0, 20.0, 41))
+    for distance, drawn in [(3.3, True), (3.45, False)]:  # range_max 3.5, margin 0.1
+        dut = mut.ScanMatchingSlam(initial_pose=(0.0, 0.0, 0.0))
+        ranges = distance / np.cos(angles)  # a wall x = distance
+        dut.update(ranges, angles, (0.0, 0.0, 0.0), range_max=3.5)
+        grid = dut.map(crop=False)
+        row = int((0.0 - grid.origin[1]) / grid.resolution)
+        col = int((distance + 0.01 - grid.origin[0]) / grid.resolution)
+        assert (grid.cells[row, col] == 100) == drawn, distance
+        if not drawn:  # a return past the margin still clears the space up to 3.4 m
+            assert grid.cells[row, int((3.37 - grid.origin[0]) / grid.resolution)] == 0
+
+
 def test_saved_map_loads_back(room_run, tmp_path):
     dut = room_run[0]
     pgm, yml = dut.save(tmp_path / "room")
@@ -150,6 +187,7 @@ def test_defaults_and_config_file(tmp_path):
         ("levels: 0", "'levels' must be at least 1"),
         ("prior_weight: [1.0, 2.0]", "'prior_weight' needs 3"),
         ("map_update_angle_deg: -1", "'map_update_angle_deg' must not be negative"),
+        ("hit_offset: 1.0", "'hit_offset' must be in"),
         ("resolutoin: 0.05", "unknown key 'resolutoin'"),
     ],
 )
