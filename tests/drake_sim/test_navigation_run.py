@@ -15,6 +15,19 @@ def room_map(tmp_path_factory):
     return nh.saved_truth_map("room", tmp_path_factory.mktemp("maps"))[0]
 
 
+@pytest.fixture(scope="module")
+def slam_map(tmp_path_factory):
+    """``slam_map(name)``: the map a mapping run of the arena saves (made once per arena)."""
+    folder, maps = tmp_path_factory.mktemp("slam_maps"), {}
+
+    def get(name: str):
+        if name not in maps:
+            maps[name] = nh.saved_slam_map(name, folder)[0]
+        return maps[name]
+
+    return get
+
+
 def _run(occupancy_map, goals, *, arena="room", world=None, seed=0, **kwargs):
     arena_ = load_arena(nh.arena_file(arena))
     run = mut.NavigationRun(
@@ -73,9 +86,9 @@ def _random_goals(arena_name, count, seed):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("arena_file", shipped_arenas(), ids=lambda p: p.stem)
-def test_ten_random_goals_per_arena_are_reached_on_the_slam_map(arena_file, tmp_path):
+def test_ten_random_goals_per_arena_are_reached_on_the_slam_map(arena_file, slam_map):
     # The workshop's order: map the arena, save the map, navigate on it (truth is the world).
-    occupancy_map, _ = nh.saved_slam_map(arena_file.stem, tmp_path)
+    occupancy_map = slam_map(arena_file.stem)
     goals = _random_goals(arena_file.stem, 10, seed=7)
     run, report = _run(occupancy_map, goals, arena=arena_file.stem)
     assert report.reached_all, [g.message for g in report.goals]
@@ -87,7 +100,8 @@ def test_ten_random_goals_per_arena_are_reached_on_the_slam_map(arena_file, tmp_
 
 
 @pytest.mark.slow
-def test_a_box_put_across_the_path_after_mapping_is_avoided(room_map):
+def test_a_box_put_across_the_path_after_mapping_is_avoided(slam_map):
+    room_map = slam_map("room")
     arena = load_arena(nh.arena_file("room"))
     scenario = nh.scenario()
     scenario.extra_obstacles = [
@@ -109,8 +123,8 @@ def test_a_box_put_across_the_path_after_mapping_is_avoided(room_map):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("arena_file", shipped_arenas(), ids=lambda p: p.stem)
-def test_amcl_converges_from_half_a_metre_and_30_degrees_off(arena_file, tmp_path):
-    occupancy_map, _ = nh.saved_truth_map(arena_file.stem, tmp_path)
+def test_amcl_converges_from_half_a_metre_and_30_degrees_off(arena_file, slam_map):
+    occupancy_map = slam_map(arena_file.stem)
     arena = load_arena(arena_file)
     x, y, yaw = arena.start_pose()
     guess = np.array([x + 0.5 * math.cos(1.0), y + 0.5 * math.sin(1.0), yaw + math.radians(30)])
@@ -123,9 +137,9 @@ def test_amcl_converges_from_half_a_metre_and_30_degrees_off(arena_file, tmp_pat
 
 
 @pytest.mark.slow
-def test_global_localization_converges_in_the_room(room_map):
+def test_global_localization_converges_in_the_room(slam_map):
     goals = _random_goals("room", 4, seed=11)
-    run, report = _run(room_map, goals, global_localization=True)
+    run, report = _run(slam_map("room"), goals, global_localization=True)
     assert report.converged_after_s is not None and report.converged_after_s <= 60.0
 
 
