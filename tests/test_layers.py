@@ -58,6 +58,7 @@ LAYERS = (
             "drake_sim.mapping",
             "drake_sim.mapping_run",
             "drake_sim.navigate",
+            "drake_sim.sweep",
             "drake_sim.navigation_run",
             "drake_sim.view",
             "drake_sim.pickplace",

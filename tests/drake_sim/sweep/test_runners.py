@@ -1,0 +1,153 @@
+import dataclasses as dc
+
+import pytest
+
+from drake_sim.base.errors import ConfigError
+from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.sweep import runners as mut
+from drake_sim.sweep.spec import load_sweep
+from tests.drake_sim.sweep.sweep_files import tiny_flip, write_sweep
+
+
+@dc.dataclass
+class Inner:
+    position: list = dc.field(default_factory=lambda: [1.0, 2.0, 3.0])
+    mass: float = 0.5
+
+
+@dc.dataclass
+class Outer:
+    inner: Inner = dc.field(default_factory=Inner)
+    rate: float = 10.0
+
+
+def test_resolve():
+    dut = Outer()
+    assert mut.resolve(dut, "rate", "w") == 10.0
+    assert mut.resolve(dut, "inner.mass", "w") == 0.5
+    assert mut.resolve(dut, "inner.position[2]", "w") == 3.0
+    with pytest.raises(ConfigError, match=r"w: unknown parameter path 'inner.bogus'.*mass"):
+        mut.resolve(dut, "inner.bogus", "w")
+    with pytest.raises(ConfigError, match="inner.position has no item 3"):
+        mut.resolve(dut, "inner.position[3]", "w")
+    with pytest.raises(ConfigError, match="is a section, not a value"):
+        mut.resolve(dut, "inner", "w")
+    with pytest.raises(ConfigError, match="unknown parameter path 'rate.x'"):
+        mut.resolve(dut, "rate.x", "w")
+
+
+def test_override_strings():
+    dut = mut.override_strings(
+        Outer(), {"rate": 5, "inner.position[0]": 9.5, "inner.position[2]": -1.0, "m": "physics"}
+    )
+    assert dut == ["rate=5", 'm="physics"', "inner.position=[9.5, 2.0, -1.0]"]
+
+
+def job_of(tmp_path, text):
+    return mut.make_job(load_sweep(write_sweep(tmp_path, text)))
+
+
+def test_make_job(tmp_path):
+    job = mut.make_job(load_sweep(tiny_flip(tmp_path)))
+    assert job["runner"] == "flip"
+    assert job["scenario"].endswith("config/flip.yaml")
+    assert job["options"] == {"duration": 0.3, "robot": None}
+
+
+def test_make_job_resolves_the_robot_file_next_to_the_sweep(tmp_path):
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "robots" / "r.yaml").write_text(default_robot_file().read_text())
+    job = job_of(tmp_path, "runner: flip\noptions: {robot: robots/r.yaml}\n")
+    assert job["options"]["robot"] == str((tmp_path / "robots" / "r.yaml").resolve())
+    with pytest.raises(ConfigError, match="no such robot file"):
+        job_of(tmp_path, "runner: flip\noptions: {robot: robots/none.yaml}\n")
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("runner: rocket\n", "unknown runner 'rocket' (known: flip, pickplace, walle, navigation)"),
+        ("runner: flip\noptions: {speed: 1}\n", "unknown option 'speed' for flip"),
+        (
+            "runner: flip\nparameters: {flip.drive_sped: {grid: [1]}}\n",
+            "unknown parameter path 'flip.drive_sped'",
+        ),
+        (
+            "runner: flip\nparameters: {robot.body.weight: {grid: [1]}}\n",
+            "unknown parameter path 'body.weight'",
+        ),
+        (
+            "runner: pickplace\nparameters: {'scene.object.position[5]': {grid: [1]}}\n",
+            "scene.object.position has no item 5",
+        ),
+        ("runner: flip\nmetrics: [flipz]\n", "'flipz' is not a flip report key"),
+        ("runner: pickplace\nsuccess: won\n", "'won' is not a pickplace report key"),
+    ],
+)
+def test_make_job_bad_input(tmp_path, text, needle):
+    with pytest.raises(ConfigError, match="sweep.yaml") as info:
+        job_of(tmp_path, text)
+    assert needle in str(info.value)
+
+
+def test_run_rollout_flip(tmp_path):
+    job = mut.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
+    rollout = {"index": 4, "seed": 11, "overrides": {"flip.drive_speed": 0.7}}
+    dut = mut.run_rollout(job, rollout)
+    assert (dut["index"], dut["seed"], dut["status"], dut["reason"]) == (4, 11, "ok", "")
+    assert dut["report"]["sim_time_s"] == pytest.approx(0.2)
+    assert dut["report"]["seed"] == 11
+    assert dut["wall_time_s"] > 0 and ":" in dut["worker"]
+
+
+def test_a_failing_rollout_is_a_row_with_its_reason(tmp_path):
+    job = mut.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
+    dut = mut.run_rollout(job, {"index": 0, "seed": 1, "overrides": {"robot.body.mass": -1.0}})
+    assert dut["status"] == "failed"
+    assert dut["reason"].startswith("ConfigError: ")
+    assert "'body.mass' must be finite and > 0" in dut["reason"]
+    assert dut["report"] == {}
+
+
+def test_pickplace_rollout_moves_the_object(tmp_path):
+    job = job_of(tmp_path, "runner: pickplace\n")
+    runner = mut.get_runner("pickplace")
+    moved = runner.load(job["scenario"], {"scene.object.position[1]": -0.3, "mode": "kinematic"}, 5)
+    assert moved.scene.object.position[1] == -0.3
+    assert moved.mode == "kinematic"
+    assert moved.planner.seed == 5
+
+
+def test_walle_rollout(tmp_path):
+    text = (
+        "runner: walle\noptions: {duration: 0.3}\n"
+        "parameters: {robot.body.mass: {grid: [1.0]}, mode: {grid: [balance]}}\n"
+        "metrics: [fell, max_abs_pitch_deg]\n"
+    )
+    job = job_of(tmp_path, text)
+    rollout = {"index": 0, "seed": 2, "overrides": {"robot.body.mass": 1.0, "mode": "balance"}}
+    dut = mut.run_rollout(job, rollout)
+    assert dut["status"] == "ok", dut["reason"]
+    assert dut["report"]["mode"] == "balance" and dut["report"]["fell"] is False
+    assert dut["report"]["sim_time_s"] == pytest.approx(0.3, abs=0.05)
+    with pytest.raises(ConfigError, match="unknown parameter path 'body.masss'"):
+        job_of(tmp_path, "runner: walle\nparameters: {robot.body.masss: {grid: [1]}}\n")
+
+
+def test_navigation_runner_checks_its_paths_and_drives_to_a_goal(tmp_path):
+    job = job_of(
+        tmp_path,
+        "runner: navigation\noptions: {goals: 1}\n"
+        "parameters: {lidar.noise_sigma: {grid: [0.01]}, robot.limits.max_linear_velocity:"
+        " {grid: [0.2]}}\nmetrics: [goals_reached, max_position_error_m, collisions]\n",
+    )
+    assert job["options"]["goals"] == 1 and job["options"]["map"] is None
+    with pytest.raises(ConfigError, match="unknown parameter path 'lidar.bogus'"):
+        job_of(tmp_path, "runner: navigation\nparameters: {lidar.bogus: {grid: [1]}}\n")
+    with pytest.raises(ConfigError, match="'goals' is not a navigation report key"):
+        job_of(tmp_path, "runner: navigation\nmetrics: [goals]\n")
+    row = mut.run_rollout(job, {"index": 0, "seed": 4, "overrides": {"lidar.noise_sigma": 0.01}})
+    assert row["status"] == "ok", row["reason"]
+    report = row["report"]
+    assert report["goals_reached"] == 1 and report["reached_all"] and report["collisions"] == 0
+    assert report["max_position_error_m"] <= 0.05
