@@ -32,7 +32,8 @@ The defaults were chosen by measurement on a synthetic 8 m x 6 m room (30 m rout
 maps: no better (0.5 cell) or worse (0.7 cell: 0.09 to 0.1 m); likelihood fields (``field``)
 with each level starting from the better of the coarser result and the prediction: 0.016 to
 0.045 m, the defaults. On the shipped arenas (``benchmarks/slam_benchmark.py``, ray-marched
-scans): 0.016 to 0.017 m, about 4 ms per scan.
+scans): 0.016 to 0.017 m with hector's marking, 0.004 to 0.011 m with the hit offset and range
+margin below, about 4 to 5 ms per scan.
 
 The map frame is the world frame: the first scan is inserted at ``initial_pose``, and the grids
 (``map_size`` m square) are centred on it.
