@@ -18,15 +18,18 @@ validated path. Each report row has ``family``, ``problem``, ``valid``, ``succes
 with ``--compare-ompl`` also ``ompl_success``, ``ompl_time_s``, ``ompl_path_length``,
 ``ompl_path_valid_fine`` (OMPL RRTConnect plus simplification on the same checker).
 ``--plot FILE`` writes a PNG with histograms of the times per problem (log scale), ours and
-OMPL's. A progress bar (tqdm, when installed) runs on stderr. Paths are re-checked with Drake's
-checker alone (``planning.collision.checker.CheckerAdapter``), whatever collision model the
-planner used.
+OMPL's. ``--profile`` prints where the time of each request goes (phases with exclusive
+times, checks per request; ``planning._benchmark_profile``) and times ``plan_to_joints``' time
+parametrisation apart, after the timed interval. A progress bar (tqdm, when installed) runs on
+stderr. Paths are re-checked with Drake's checker alone
+(``planning.collision.checker.CheckerAdapter``), whatever collision model the planner used.
 Exit code 0 when the run completed, 2 on bad input.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -37,6 +40,7 @@ import numpy as np
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
+from planning._benchmark_profile import PhaseProfiler, breakdown
 from planning._ompl_baseline import ompl_available, ompl_plan
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import PlanningError
@@ -68,8 +72,9 @@ def _load(scene, problem):
     return request.q_start[ARM_Q], request.q_goal[ARM_Q]
 
 
-def run_problem(scene, planner, problem, timeout: float) -> dict:
-    """Plans one problem and returns its report row."""
+def run_problem(scene, planner, problem, timeout: float, profiler=None) -> dict:
+    """Plans one problem and returns its report row; with a ``PhaseProfiler`` active, also
+    records the request's phases (and times the path's time parametrisation apart)."""
     q_start, q_goal = _load(scene, problem)
     valid = all(
         scene.in_joint_limits(q, 1e-6) and scene.is_collision_free(q) for q in (q_start, q_goal)
@@ -88,6 +93,10 @@ def run_problem(scene, planner, problem, timeout: float) -> dict:
         path = None
         row["error"] = f"{e.code.name}: {e.message}"
     row["time_s"] = time.perf_counter() - start
+    if profiler is not None:
+        if path is not None:  # plan_to_joints' last step, outside the timed interval
+            planner._make_plan(path, row["planner"], time.perf_counter())
+        profiler.take(row["time_s"], f"{problem.family} {problem.number}")
     if path is not None:
         row.update(_path_fields(scene, path))
     return row
@@ -202,6 +211,9 @@ def _parse_args(argv):
         "--compare-ompl", action="store_true", help="also run OMPL RRTConnect+simplify"
     )
     parser.add_argument(
+        "--profile", action="store_true", help="print where the time of the requests goes"
+    )
+    parser.add_argument(
         "--plot",
         type=cli.output_file("plot"),
         help="PNG with histograms of the times (matplotlib)",
@@ -236,14 +248,16 @@ def _main(argv) -> int:
     rows = []
     problems = list(mbm.iter_problems(folder, args.families, args.limit))
     bar = _progress(len(problems) * (2 if args.compare_ompl else 1))
-    for problem in problems:
-        rows.append(run_problem(scene, planner, problem, args.timeout))
-        row = rows[-1]
-        bar.write(
-            f"{row['family']} {row['problem']:4d} valid={row['valid']} "
-            f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}"
-        )
-        bar.update()
+    profiler = PhaseProfiler() if args.profile else None
+    with profiler or contextlib.nullcontext():  # wraps the planner's steps while profiling
+        for problem in problems:
+            rows.append(run_problem(scene, planner, problem, args.timeout, profiler))
+            row = rows[-1]
+            bar.write(
+                f"{row['family']} {row['problem']:4d} valid={row['valid']} "
+                f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}"
+            )
+            bar.update()
     if args.compare_ompl:
         # After all of ours: running OMPL in between was measured to slow our planner 2-3x.
         for problem, row in zip(problems, rows, strict=True):
@@ -252,6 +266,8 @@ def _main(argv) -> int:
             bar.update()
     bar.close()
     print(summarize(rows))
+    if profiler is not None:
+        print("\n" + breakdown(profiler.requests))
     if args.report is not None:
         cli.write_text(args.report, json.dumps(rows, indent=1), "report")
     if args.plot is not None:

@@ -149,3 +149,13 @@ def test_progress_falls_back_to_plain_lines(monkeypatch, capsys):
     bar.update()
     bar.close()
     assert "one line" in capsys.readouterr().out
+
+
+def test_profile_prints_the_breakdown(capsys):
+    assert mut.main(["--families", "cage_panda", "--limit", "2", "--profile"]) == 0
+    out = capsys.readouterr().out
+    assert "profile over 2 requests" in out and "tail only" in out
+    assert "validate 0.01 rad" in out and "checks per request" in out
+    assert "SphereCollisionModel.prefixes" in out
+    # The wrappers are gone afterwards.
+    assert mut.MotionPlanner.plan_path.__module__ == "planning.motion_planner"
