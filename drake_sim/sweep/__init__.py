@@ -20,6 +20,7 @@ Sweep file (YAML; paths relative to the file; unknown keys are errors)::
       flip.drive_speed: {uniform: [0.6, 1.0]}              # [low, high), low < high
       imu.angular_velocity_noise: {normal: [0.01, 0.002]}  # [mean, sigma], sigma >= 0
       mode: {choice: [kinematic, physics]}                 # one value drawn at random
+      scene: {random: 200}                                 # 200 generated scenes, 0 to 199
       scene.object.position[1]: {uniform: [-0.3, -0.2]}   # one item of a list
     metrics: [flips, odometry_error_m]     # report keys kept in the table
     success: [flips >= 2, "stuck == false"]  # all must hold; or one boolean key: success
@@ -29,6 +30,9 @@ The rollouts are the grid points (first parameter slowest) times ``samples`` dra
 numbers only, so the same file gives the same rollouts on any backend with any number of
 workers; every grid point gets the same draws and seeds (common random numbers), so grid points
 are compared on the same random scenes and noise.
+``random: N`` enumerates values the runner generates, like a grid of their numbers 0 to N - 1:
+``pickplace`` generates ``scene`` (``planning.task.scene_generator.random_scene`` from
+``default_rng(k)`` on the scenario's table, so scene k is the same in every sweep).
 For the flip and walle runners, paths under ``robot.`` vary the robot file
 (``config/ddrive.yaml``, ``config/walle.yaml``), the rest the scenario (``config/flip.yaml``,
 ``config/walle_scenario.yaml``); for pickplace, ``PickPlaceScenario`` (``mode``, ``scene.*``,

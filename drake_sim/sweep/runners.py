@@ -211,6 +211,9 @@ class PickPlaceRunner:
     name = "pickplace"
     options = {}
     file_options = ()
+    # ``scene: {random: N}``: scene k is ``random_scene`` drawn from ``default_rng(k)`` on the
+    # scenario's table (the same scene k in every sweep).
+    generated = ("scene",)
 
     def default_scenario(self) -> Path:
         return config_dir() / "pickplace_scenario.yaml"
@@ -221,13 +224,23 @@ class PickPlaceRunner:
         return ("mode", *TaskReport().to_dict())
 
     def load(self, scenario: str, overrides: dict, seed: int | None = None):
-        from diagrams.pickplace_scenario import load_pickplace_scenario
+        import numpy as np
 
+        from diagrams.pickplace_scenario import check_scenario, load_pickplace_scenario
+        from planning.task.scene_generator import random_scene
+
+        overrides = dict(overrides)
+        scene_number = overrides.pop("scene", None)
         base = load_pickplace_scenario(scenario)
         strings = override_strings(base, overrides)
         if seed is not None and "planner.seed" not in overrides:
             strings.append(f"planner.seed={seed}")
-        return load_pickplace_scenario(scenario, overrides=strings)
+        loaded = load_pickplace_scenario(scenario, overrides=strings)
+        if scene_number is not None:
+            scene = random_scene(np.random.default_rng(int(scene_number)), loaded.scene)
+            loaded = dc.replace(loaded, scene=scene)
+            check_scenario(loaded, f"random scene {scene_number}")
+        return loaded
 
     def check_paths(self, scenario: str, options: dict, paths, where: str) -> None:
         base = self.load(scenario, {})
@@ -369,7 +382,27 @@ def make_job(spec) -> dict:
             value = str(path if path.is_absolute() else (Path(where).parent / path).resolve())
         options[key] = value
     scenario = spec.scenario or str(runner.default_scenario())
-    runner.check_paths(scenario, options, [p.path for p in spec.parameters], where)
+    generated = getattr(runner, "generated", ())
+    for p in spec.parameters:
+        if p.kind == "random" and p.path not in generated:
+            names = ", ".join(generated) or "nothing"
+            raise ConfigError(
+                f"{where}: parameter '{p.path}': random draws values the runner generates, "
+                f"and {runner.name} generates {names}"
+            )
+    if any(p.kind == "random" for p in spec.parameters):
+        clash = [
+            p.path
+            for p in spec.parameters
+            if p.kind != "random"
+            and p.path.split(".")[0] in {q.path for q in spec.parameters if q.kind == "random"}
+        ]
+        if clash:
+            raise ConfigError(
+                f"{where}: parameter '{clash[0]}' is inside a generated value (random)"
+            )
+    plain = [p.path for p in spec.parameters if p.kind != "random"]
+    runner.check_paths(scenario, options, plain, where)
     known = runner.metric_keys()
     for key in (*spec.metrics, *(c.key for c in spec.success)):
         if key not in known:

@@ -30,7 +30,10 @@ TOP_KEYS = (
     "metrics",
     "success",
 )
-DISTRIBUTIONS = ("grid", "uniform", "normal", "choice")
+DISTRIBUTIONS = ("grid", "uniform", "normal", "choice", "random")
+# Kinds enumerated like a grid: ``random: N`` is the numbers 0 to N - 1 of values the runner
+# generates (``scene: {random: 200}``: pick-and-place scenes 0 to 199).
+ENUMERATED = ("grid", "random")
 _PATH = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*(\[\d+\])?$")
 _COMPARISON = re.compile(r"^\s*([A-Za-z_]\w*)\s*(>=|<=|==|!=|>|<)\s*(\S.*?)\s*$")
 _SEED_BITS = 31  # Per-rollout seeds fit a signed 32-bit int (Drake's RandomGenerator takes them).
@@ -91,11 +94,11 @@ class SweepSpec:
 
     @property
     def grid(self) -> tuple[Parameter, ...]:
-        return tuple(p for p in self.parameters if p.kind == "grid")
+        return tuple(p for p in self.parameters if p.kind in ENUMERATED)
 
     @property
     def random(self) -> tuple[Parameter, ...]:
-        return tuple(p for p in self.parameters if p.kind != "grid")
+        return tuple(p for p in self.parameters if p.kind not in ENUMERATED)
 
     @property
     def size(self) -> int:
@@ -220,6 +223,10 @@ def _parameter(path, spec, where: str) -> Parameter:
         raise ConfigError(
             f"{at}: unknown distribution {kind!r} (known: {', '.join(DISTRIBUTIONS)})"
         )
+    if kind == "random":
+        if isinstance(values, bool) or not isinstance(values, int) or values < 1:
+            raise ConfigError(f"{at}: random needs a count >= 1 (random: 200), got {values!r}")
+        return Parameter(path=path, kind=kind, values=tuple(range(values)))
     if not isinstance(values, list) or not values:
         raise ConfigError(f"{at}: {kind} needs a non-empty list")
     values = [_finite(v, where, f"{path}.{kind}") for v in values]

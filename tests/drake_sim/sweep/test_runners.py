@@ -151,3 +151,20 @@ def test_navigation_runner_checks_its_paths_and_drives_to_a_goal(tmp_path):
     report = row["report"]
     assert report["goals_reached"] == 1 and report["reached_all"] and report["collisions"] == 0
     assert report["max_position_error_m"] <= 0.05
+
+
+def test_random_scenes_are_generated_by_number(tmp_path):
+    with pytest.raises(ConfigError, match="flip generates nothing"):
+        job_of(tmp_path, "runner: flip\nparameters: {flip: {random: 2}}\n")
+    with pytest.raises(ConfigError, match="'scene.object.mass' is inside a generated value"):
+        job_of(
+            tmp_path,
+            "runner: pickplace\nparameters: {scene: {random: 2},"
+            " scene.object.mass: {uniform: [0.1, 0.2]}}\n",
+        )
+    job = job_of(tmp_path, "runner: pickplace\nparameters: {scene: {random: 2}}\n")
+    runner = mut.get_runner("pickplace")
+    scenes = [runner.load(job["scenario"], {"scene": k}, seed=1).scene for k in (0, 1, 0)]
+    assert scenes[0] == scenes[2] and scenes[0] != scenes[1]  # scene k is always the same
+    default = runner.load(job["scenario"], {}, seed=1).scene
+    assert scenes[0].object != default.object

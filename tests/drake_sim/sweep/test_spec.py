@@ -141,3 +141,25 @@ def test_no_parameters_is_one_rollout_per_repeat(tmp_path):
     dut = mut.rollouts(load_text(tmp_path, BASE + "repeats: 3\n"))
     assert [r.overrides for r in dut] == [{}, {}, {}]
     assert not math.isnan(dut[0].seed)
+
+
+def test_random_counts_generated_values(tmp_path):
+    path = write_sweep(
+        tmp_path,
+        "runner: pickplace\nparameters: {mode: {grid: [kinematic, physics]}, scene: {random: 3}}\n",
+    )
+    dut = mut.load_sweep(path)
+    assert dut.size == 6
+    assert [r.overrides for r in mut.rollouts(dut)[:4]] == [
+        {"mode": "kinematic", "scene": 0},
+        {"mode": "kinematic", "scene": 1},
+        {"mode": "kinematic", "scene": 2},
+        {"mode": "physics", "scene": 0},
+    ]
+    for bad in ("0", "-2", "[3]", "2.5", "true"):
+        with pytest.raises(ConfigError, match="random needs a count >= 1"):
+            mut.load_sweep(
+                write_sweep(
+                    tmp_path, f"runner: pickplace\nparameters: {{scene: {{random: {bad}}}}}\n"
+                )
+            )
