@@ -212,3 +212,68 @@ def test_timing_is_deterministic(path):
 def test_bad_options_are_rejected(kwargs):
     with pytest.raises(ValueError):
         mut.RetimeOptions(**kwargs)
+
+
+# The path that the pick-and-place's move over the wall took in random scene 51 (kinematic mode,
+# ``config/sweeps/pickplace_random_scenes.yaml``): its timing peaked 0.04 % over joint 3's
+# acceleration limit at a waypoint, between the samples the timing checked, and the execution
+# gate refused the plan.
+SCENE_51_PATH = np.array(
+    [
+        [
+            -0.3985439662784397,
+            0.37136780078878695,
+            -0.06789040295390109,
+            -2.306908530669515,
+            0.05497222841699949,
+            2.676890173693412,
+            -0.3683930267599648,
+        ],
+        [
+            -0.36164221386322737,
+            0.3363348092816471,
+            -0.012893139248906609,
+            -2.2508152386030043,
+            0.005581131362556828,
+            2.6833748523854153,
+            -0.3309808506248699,
+        ],
+        [
+            -0.1529306592146309,
+            0.24355429667957051,
+            0.16290670661426987,
+            -2.1501102505928484,
+            -0.14425975872501368,
+            2.706346990747488,
+            -0.034848936606411474,
+        ],
+        [
+            -0.0075932227956590215,
+            0.2647511430666732,
+            0.17517390925056378,
+            -2.2563403994172284,
+            -0.14313204657450107,
+            2.7111831096079078,
+            0.24020708187431075,
+        ],
+        [
+            0.18869561454185899,
+            0.3034951706025968,
+            0.17875510530789565,
+            -2.420603852648349,
+            -0.12917439313998955,
+            2.716398837060527,
+            0.6198067080352199,
+        ],
+    ]
+)
+
+
+def test_limits_hold_at_the_waypoints_where_the_acceleration_peaks():
+    # The acceleration has a corner where the path passes a knot (a waypoint of a smoothed
+    # section), and the execution gate samples the trajectory there.
+    dut = mut.Timing(SCENE_51_PATH, V_MAX, A_MAX)
+    assert dut.smoothed  # the case in point: one smoothed section
+    ts = np.concatenate([np.linspace(0.0, dut.duration, 20001), dut.times])
+    a = np.array([dut.sample(t)[2] for t in ts])
+    assert np.all(np.abs(a) <= A_MAX * (1 + 1e-6)), np.max(np.abs(a) / A_MAX)
