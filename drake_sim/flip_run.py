@@ -5,14 +5,14 @@ import math
 import time
 
 import numpy as np
-from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.analysis import ApplySimulatorConfig
 from tqdm import tqdm
 
 from diagrams.flip import make_flip_diagram
 from diagrams.flip_scenario import FlipScenario
 from drake_sim.base.report import RunReport, run_times
+from drake_sim.base.simulation import start_simulator
 from drake_sim.robots.ddrive_params import RobotParams
 from drake_sim.systems.control.flip_controller import STATUS_FIELDS, FlipMode
 
@@ -114,14 +114,14 @@ class FlipRun:
         self.seed = scenario.scene.random_seed if seed is None else seed
         self.controller = controller
         self.diagram = make_flip_diagram(scenario, robot, meshcat=meshcat, controller=controller)
-        self.simulator = Simulator(self.diagram)
         if realtime is None:
             realtime = meshcat is not None
-        if realtime:
-            ApplySimulatorConfig(scenario.scene.simulator, self.simulator)
-        self.context = self.simulator.get_mutable_context()
-        self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
-        self.simulator.Initialize()
+        config = scenario.scene.simulator
+        self.simulator, self.context = start_simulator(
+            self.diagram,
+            self.seed,
+            (lambda s: ApplySimulatorConfig(config, s)) if realtime else None,
+        )
         self.wall_time = 0.0
 
     def advance_to(self, t: float, *, progress: bool = False) -> None:

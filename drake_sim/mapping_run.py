@@ -16,15 +16,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import Simulator
 
 from diagrams.mapping import make_mapping_diagram
 from diagrams.mapping_scenario import MappingScenario
 from drake_sim.base import cli
 from drake_sim.base.map_files import OccupancyMap, save_map
 from drake_sim.base.report import RunReport, run_times
+from drake_sim.base.simulation import start_simulator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
 from drake_sim.worlds.arena import Arena, arena_grid
@@ -94,11 +93,9 @@ class MappingRun:
             teleop=teleop,
             keyframes=keyframes,
         )
-        self.simulator = Simulator(self.diagram)
-        self.context = self.simulator.get_mutable_context()
-        self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
-        self.simulator.set_target_realtime_rate(1.0 if realtime else 0.0)
-        self.simulator.Initialize()
+        self.simulator, self.context = start_simulator(
+            self.diagram, self.seed, lambda s: s.set_target_realtime_rate(1.0 if realtime else 0.0)
+        )
         self._slam = self.diagram.GetSubsystemByName("slam")
         self._truth_log = self.diagram.GetSubsystemByName("log_true_pose")
         self._route = self.diagram.GetSubsystemByName("route_follower") if not teleop else None

@@ -19,9 +19,7 @@ import math
 import time
 
 import numpy as np
-from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import Simulator
 
 from diagrams.lidar_robot import ROBOT_NAME
 from diagrams.navigation import make_navigation_diagram
@@ -29,6 +27,7 @@ from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base import cli
 from drake_sim.base.map_files import OccupancyMap
 from drake_sim.base.report import RunReport, run_times
+from drake_sim.base.simulation import start_simulator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.worlds.arena import Arena
 
@@ -150,11 +149,9 @@ class NavigationRun:
             goals=self.goals,
             meshcat=meshcat,
         )
-        self.simulator = Simulator(self.diagram)
-        self.context = self.simulator.get_mutable_context()
-        self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
-        self.simulator.set_target_realtime_rate(1.0 if realtime else 0.0)
-        self.simulator.Initialize()
+        self.simulator, self.context = start_simulator(
+            self.diagram, self.seed, lambda s: s.set_target_realtime_rate(1.0 if realtime else 0.0)
+        )
         self.navigator = self.diagram.GetSubsystemByName("navigator")
         self.amcl = self.diagram.GetSubsystemByName("amcl")
         self._plant = self.diagram.GetSubsystemByName("plant")

@@ -10,15 +10,15 @@ import math
 import time
 
 import numpy as np
-from pydrake.common import RandomGenerator
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.analysis import ApplySimulatorConfig
 
 from diagrams.walle import expected_duration, make_walle_course_diagram
 from diagrams.walle_balance import ROBOT_NAME, walle_track
 from diagrams.walle_scenario import WalleScenario
 from drake_sim.base import cli
 from drake_sim.base.report import RunReport, run_times
+from drake_sim.base.simulation import start_simulator
 from drake_sim.robots.walle import BODY_LINK
 from drake_sim.robots.walle_params import WalleParams
 from drake_sim.systems.axle import axle_yaw_and_pitch
@@ -81,14 +81,14 @@ class WalleCourseRun:
         self.diagram = make_walle_course_diagram(
             scenario, robot, course, meshcat=meshcat, teleop=teleop
         )
-        self.simulator = Simulator(self.diagram)
         if realtime is None:
             realtime = meshcat is not None
-        if realtime:
-            ApplySimulatorConfig(scenario.walle.simulator, self.simulator)
-        self.context = self.simulator.get_mutable_context()
-        self.diagram.SetRandomContext(self.context, RandomGenerator(self.seed))
-        self.simulator.Initialize()
+        config = scenario.walle.simulator
+        self.simulator, self.context = start_simulator(
+            self.diagram,
+            self.seed,
+            (lambda s: ApplySimulatorConfig(config, s)) if realtime else None,
+        )
         self.wall_time = 0.0
         self.progress = 0.0  # m passed in order, checked every CHECK_PERIOD.
         self._s = self.line.project(course_start(course)).s

@@ -195,13 +195,14 @@ class ParticleFilter:
             if not (self._force or moved or turned):
                 return False
             self._move(self._odom, odom)
-        self._sense(
+        scan = (
             np.asarray(ranges, dtype=float),
             np.asarray(angles, dtype=float),
             float(range_max),
             float(range_min),
             np.asarray(X_base_sensor, dtype=float),
         )
+        self._sense(*scan)
         self._resample_count += 1
         if self._resample_count % self.config.resample_interval == 0 and self._degenerate():
             self._resample()
@@ -209,13 +210,7 @@ class ParticleFilter:
         self.updates += 1
         self._estimate = _estimate(self.particles, self.weights)
         if self._pyramid:
-            self._refine(
-                np.asarray(ranges, dtype=float),
-                np.asarray(angles, dtype=float),
-                float(range_max),
-                float(range_min),
-                np.asarray(X_base_sensor, dtype=float),
-            )
+            self._refine(*scan)
         return True
 
     def estimate(self) -> tuple[np.ndarray, np.ndarray]:
