@@ -1,16 +1,17 @@
 """Where the time of a request goes: ``python -m planning.benchmark --profile``.
 
 ``PhaseProfiler`` wraps, inside its ``with`` block only, the functions a request goes through
-(monkeypatching: the planner's code is untouched and costs nothing when not profiling) and
-charges every moment to one row: the innermost *stage* (a step of ``MotionPlanner.plan_path``,
-below) and what ran there, the stage's own Python code (``python``), the compiled sphere kernel
-(``spheres``: ``SphereCollisionModel.classify``/``prefixes``) or Drake's collision checker
-(``drake``: ``CollisionChecker.Check*CollisionFree``, the fallback for what the
-spheres cannot decide). The times are exclusive, so a request's rows sum to the time inside
-``plan_path``; ``take`` adds an ``other`` row for the rest of the benchmark's timed interval.
-Stages nest: ``validate 0.01 rad > rrt-connect`` is a repair of a segment that failed the fine
-check (the ``request`` and ``find`` ancestors are left out of the row names). Each wrapped
-call costs about a microsecond, which lands in the enclosing row.
+(monkeypatching: the planner's code is untouched and costs nothing when not profiling) and charges
+every moment to one row: the innermost *stage* (a step of ``MotionPlanner.plan_path``, below) and
+what ran there, the stage's own Python code (``python``), the compiled sphere kernel (``spheres``:
+``SphereCollisionModel.classify``/``prefixes``; in the compiled search, ``search on spheres`` and
+``fine check on spheres``: ``planning.search.compiled_rrt``) or Drake's collision checker
+(``drake``: ``CollisionChecker.Check*CollisionFree``, the fallback for what the spheres cannot
+decide). The times are exclusive, so a request's rows sum to the time inside ``plan_path``; ``take``
+adds an ``other`` row for the rest of the benchmark's timed interval. Stages nest: ``validate 0.01
+rad > rrt-connect`` is a repair of a segment that failed the fine check (the ``request`` and
+``find`` ancestors are left out of the row names). Each wrapped call costs about a microsecond,
+which lands in the enclosing row.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from pydrake.planning import CollisionChecker
 
 from planning.collision.spheres import SphereCollisionModel
 from planning.motion_planner import MotionPlanner
+from planning.search import compiled_rrt
 from planning.search.joint_path import JointPathSearch
 
 # (owner, method, stage): the steps of a request, each named after what its code does.
@@ -33,6 +35,7 @@ STAGES = (
     (MotionPlanner, "_check_goal", "start/goal check"),
     (MotionPlanner, "_make_plan", "retime"),  # plan_to_joints only: Plan + smoothing check
     (JointPathSearch, "find", "find: straight line, adapters"),  # and the steps below
+    (JointPathSearch, "_compiled", "compiled"),  # the compiled search and its fine check
     (JointPathSearch, "_rrt", "rrt-connect"),  # tree growth on coarse (0.1 rad) edges
     (JointPathSearch, "_shortcut", "shortcut"),
     (JointPathSearch, "_validated", "validate 0.01 rad"),  # fine re-check, repairs nested
@@ -43,6 +46,8 @@ CHECKS = (
     (SphereCollisionModel, "classify", "spheres"),
     (SphereCollisionModel, "prefixes", "spheres"),
     (SphereCollisionModel, "sync", "sphere sync"),
+    (compiled_rrt, "plan", "search on spheres"),  # straight line, RRT-Connect, shortcuts
+    (compiled_rrt, "fine_check", "fine check on spheres"),
     (CollisionChecker, "CheckConfigCollisionFree", "drake"),
     (CollisionChecker, "CheckConfigsCollisionFree", "drake"),
     (CollisionChecker, "CheckEdgeCollisionFree", "drake"),
@@ -80,7 +85,7 @@ class PhaseProfiler:
     def _wrap(self, owner, name: str, label: str, *, is_stage: bool) -> None:
         original = owner.__dict__[name]
         self._saved.append((owner, name, original))
-        counter = f"{owner.__name__}.{name}"
+        counter = f"{owner.__name__.rsplit('.', 1)[-1]}.{name}"
 
         @functools.wraps(original)
         def wrapper(*args, **kwargs):
@@ -98,7 +103,10 @@ class PhaseProfiler:
                     self._calls["Drake configurations"] += 1
             self._stack.append([row, path, time.perf_counter(), 0.0])
             try:
-                return original(*args, **kwargs)
+                result = original(*args, **kwargs)
+                if owner is compiled_rrt:  # plan and fine_check return their count last
+                    self._calls["compiled configurations"] += int(result[-1])
+                return result
             finally:
                 row, _, start, children = self._stack.pop()
                 elapsed = time.perf_counter() - start

@@ -52,10 +52,11 @@ def _count(value, field: str, *, least: int) -> None:
 class RrtConnectOptions:
     """RRT-Connect (``planning.search.rrt``), ``batch`` extensions per collision query."""
 
-    # rad, largest RRT-Connect extension (joint-space L2). Measured on MBM (--limit 5 and 15,
-    # same runs as OMPL): step 1.0 with batch 16 beat 0.5 with batch 8 on median (100 vs
-    # 140 ms), p95 (1.4 vs 2.4 s) and path length; one problem got slower.
-    step: float = 1.0
+    # rad, largest RRT-Connect extension (joint-space L2). Measured on all of MBM with the
+    # compiled search (shortcut.iterations 40): 0.5 against 1.0, p95 24 against 37 ms, median
+    # 3.2 against 3.1 ms, paths 4.91 against 5.01 rad. (Before it, the batched Python search
+    # measured 1.0 with batch 16 better than 0.5 with batch 8.)
+    step: float = 0.5
     goal_bias: float = 0.05  # probability of sampling the other tree's root
     batch: int = 16  # RRT-Connect extensions per collision query (1: one at a time); see step
     # s, RRT-Connect restarts with new trees after this (run times are heavy-tailed); shorter
@@ -74,7 +75,10 @@ class RrtConnectOptions:
 class ShortcutOptions:
     """Shortcutting of a searched path (``planning.search.shortcut``)."""
 
-    iterations: int = 20  # random shortcut attempts after the greedy pass
+    # Random shortcut attempts after the greedy pass. Measured on all of MBM with the compiled
+    # search: 40 / 50 / 60 gave median paths of 4.94 / 4.90 / 4.89 rad for median times of
+    # 3.0 / 3.3 / 3.5 ms.
+    iterations: int = 50
     time_fraction: float = 0.2  # at most this share of the remaining time goes to shortcutting
 
     def check(self, prefix: str = "shortcut") -> None:
@@ -180,14 +184,21 @@ class SphereCheckOptions:
     # m, how far spheres may bulge beyond the link meshes (smaller: a tighter cover, more spheres)
     slack: float = 0.015
     # Sphere-checked configurations of a search before Drake is asked about what the spheres
-    # cannot decide (until then that counts as colliding); validation always asks Drake. A
-    # count, not a time, so that a seed gives the same path on any machine. Measured on MBM
-    # (--limit 5, two runs each): 50k had the best mean (85-91 ms) and p95 (0.27 s); 10k and 25k
-    # were slower (mean 107-150 ms, p95 0.56-0.63 s), and 100k missed a problem.
+    # cannot decide (until then that counts as colliding); validation always asks Drake. The
+    # compiled search (planning.search.compiled_rrt) gives up after this many, and the Python
+    # pipeline then asks Drake from the start. A count, not a time, so that a seed gives the
+    # same path on any machine. Measured on MBM (--limit 5, two runs each, before the compiled
+    # search): 50k had the best mean (85-91 ms) and p95 (0.27 s); 10k and 25k were slower (mean
+    # 107-150 ms, p95 0.56-0.63 s), and 100k missed a problem.
     drake_fallback_after: int = 50_000
     # rad between collision samples of the search's edges with sphere checks (the returned path
     # is validated at validation.resolution in any case).
     search_resolution: float = 0.1
+    # rad; in the compiled search, samples the spheres cannot decide within this distance of the
+    # start or the goal (which Drake has found free) count as free there, and Drake decides them
+    # in the fine check. 0: they block, like any other. Measured on all of MBM: 0.15 solved
+    # every problem (p95 23.5 ms); 0 left one to the Python search, which timed out.
+    anchor_radius: float = 0.15
 
     def check(self, prefix: str = "spheres") -> None:
         """Raises ValueError naming the first field out of range."""
@@ -195,6 +206,12 @@ class SphereCheckOptions:
         _positive(self.slack, f"{prefix}.slack")
         _count(self.drake_fallback_after, f"{prefix}.drake_fallback_after", least=0)
         _positive(self.search_resolution, f"{prefix}.search_resolution")
+        _require(
+            self.anchor_radius >= 0.0 and math.isfinite(self.anchor_radius),
+            f"{prefix}.anchor_radius",
+            ">= 0",
+            self.anchor_radius,
+        )
 
 
 @dc.dataclass

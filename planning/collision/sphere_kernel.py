@@ -60,6 +60,12 @@ class KernelData(NamedTuple):
     1 cylinder, 2 sphere), W = R_WO^T (row-major), offset = R_WO^T p_WO, its sizes (box: half
     sizes; cylinder: radius, half length; sphere: radius) and the lower and upper corners of
     an axis-aligned box around it.
+    Speeds: ``speed`` (L, 7), a bound on how fast any point the checks use on each body (a
+    sphere's, a group's or the body's bounding centre) moves per rad of each arm joint, m/rad,
+    in any configuration (``spheres.speed_table``; inf: no bound, so no certificates).
+    Roots, for the certificates' clearances: ``env_reach``, ``env_out_root``,
+    ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, the square roots of ``env_reach2``,
+    ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out`` (0 where those are -1).
     """
 
     parent: np.ndarray
@@ -91,6 +97,12 @@ class KernelData(NamedTuple):
     pair_out: np.ndarray
     pair_in: np.ndarray
     objects: np.ndarray
+    speed: np.ndarray
+    env_reach: np.ndarray
+    env_out_root: np.ndarray
+    body_pair_reach: np.ndarray
+    pair_reach: np.ndarray
+    pair_out_root: np.ndarray
 
 
 @njit(cache=True)
@@ -159,15 +171,13 @@ def _distance2(x, y, z, obj):
 
 
 @njit(cache=True)
-def _near_box(x, y, z, reach, obj):
-    """True when the point (x, y, z) is within ``reach`` of the axis-aligned box around the
-    object of row ``obj``."""
-    total = 0.0
-    for i, c in enumerate((x, y, z)):
-        gap = max(obj[16 + i] - c, c - obj[19 + i])
-        if gap > 0.0:
-            total += gap * gap
-    return total < reach * reach
+def _box_gap2(x, y, z, obj):
+    """Squared distance from the point (x, y, z) to the axis-aligned box around the object of
+    row ``obj``, m^2 (0 inside). Branch-free: measured twice as fast as with a loop."""
+    u = max(obj[16] - x, x - obj[19], 0.0)
+    v = max(obj[17] - y, y - obj[20], 0.0)
+    w = max(obj[18] - z, z - obj[21], 0.0)
+    return u * u + v * v + w * w
 
 
 @njit(cache=True)
@@ -191,17 +201,23 @@ def _band(d2, inner2, outer2):
 
 
 @njit(cache=True)
-def _classify_one(q, d, stop_at_unknown, work):
-    """FREE, COLLIDING or UNKNOWN for the arm configuration q (7,). With
-    ``stop_at_unknown``, returns at the first uncertain sphere (UNKNOWN, though a later
-    sphere might prove a collision). ``work`` holds scratch arrays (``_work``).
+def _classify_one(q, d, stop_at_unknown, work, lam):
+    """(verdict, radius) for the arm configuration q (7,): FREE, COLLIDING or UNKNOWN, and for
+    a FREE one how far (rad, joint-space L2) q may move along a direction whose bodies' speed
+    bounds are ``lam`` (L + Q,), m per rad (``edge_speeds``), with every sphere staying FREE
+    (inf when nothing moves; 0 for a verdict other than FREE). With ``stop_at_unknown``,
+    returns at the first uncertain sphere (UNKNOWN, though a later sphere might prove a
+    collision). ``work`` holds scratch arrays (``_work``).
 
-    The innermost loops are written out: small helpers there (a sphere centre on demand, the
+    The radius is each test's clearance (the distance beyond its threshold: body, group or
+    sphere against the objects, and body, group or sphere pairs) over the speed bound of what
+    it compares; the distance to a convex object changes no faster than the point moves. The
+    innermost loops are written out: small helpers there (a sphere centre on demand, the
     three-way verdict) measured twice as slow."""
     for k in range(len(q)):
         if not np.isfinite(q[k]):
-            return UNKNOWN  # never proven free: comparisons with NaN are all false
-    full, T, centres, seen, bodies, groups, near, stamp = work
+            return UNKNOWN, 0.0  # never proven free: comparisons with NaN are all false
+    full, T, centres, seen, bodies, groups, near, stamp, before, far = work
     stamp[0] += 1
     now = stamp[0]
     for k in range(len(d.arm)):
@@ -211,16 +227,42 @@ def _classify_one(q, d, stop_at_unknown, work):
         _point(T, d.body_step[b], d.p_BL, b, bodies, b)
     for g in range(len(d.group_step)):
         _point(T, d.group_step[g], d.p_BG, g, groups, g)
-    # Objects near each body (axis-aligned boxes around them against the body's sphere).
+    radius = np.inf
+    # Objects near each body (axis-aligned boxes around them against the body's sphere); the
+    # others were at least far[b] (the least box distance minus the body's reach) away when the
+    # list was made, with the body's centre at before[b]. The list holds while the centre stays
+    # within far[b] of there: along an edge, most samples keep it.
     objects = d.objects
     n_obj = len(objects)
     for b in range(len(d.body_step)):
-        count = 0
-        for o in range(n_obj):
-            if _near_box(bodies[b, 0], bodies[b, 1], bodies[b, 2], d.body_reach[b], objects[o]):
-                near[b, count] = o
-                count += 1
-        near[b, n_obj] = count
+        u = bodies[b, 0] - before[b, 0]
+        v = bodies[b, 1] - before[b, 1]
+        w = bodies[b, 2] - before[b, 2]
+        moved2 = u * u + v * v + w * w
+        if not (far[b] > 0.0 and moved2 < far[b] * far[b]):
+            count = 0
+            far2 = np.inf
+            x = bodies[b, 0]
+            y = bodies[b, 1]
+            z = bodies[b, 2]
+            for o in range(n_obj):
+                gx = max(objects[o, 16] - x, x - objects[o, 19], 0.0)
+                gy = max(objects[o, 17] - y, y - objects[o, 20], 0.0)
+                gz = max(objects[o, 18] - z, z - objects[o, 21], 0.0)
+                gap2 = gx * gx + gy * gy + gz * gz
+                if gap2 < d.body_reach[b] * d.body_reach[b]:
+                    near[b, count] = o
+                    count += 1
+                else:
+                    far2 = min(far2, gap2)
+            near[b, n_obj] = count
+            far[b] = np.sqrt(far2) - d.body_reach[b]  # inf when every object is near
+            before[b, 0] = bodies[b, 0]
+            before[b, 1] = bodies[b, 1]
+            before[b, 2] = bodies[b, 2]
+            moved2 = 0.0
+        if lam[b] > 0.0 and far[b] < np.inf:
+            radius = min(radius, (far[b] - np.sqrt(moved2)) / lam[b])
     state = FREE
     for e in range(len(d.env_group)):
         b = d.env_body[e]
@@ -228,13 +270,13 @@ def _classify_one(q, d, stop_at_unknown, work):
         if count == 0:
             continue
         g = d.env_group[e]
-        close = False
+        close2 = np.inf
         for i in range(count):
             o = near[b, i]
-            if _distance2(groups[g, 0], groups[g, 1], groups[g, 2], objects[o]) < d.env_reach2[e]:
-                close = True
-                break
-        if not close:
+            close2 = min(close2, _distance2(groups[g, 0], groups[g, 1], groups[g, 2], objects[o]))
+        if close2 >= d.env_reach2[e]:
+            if lam[b] > 0.0:
+                radius = min(radius, (np.sqrt(close2) - d.env_reach[e]) / lam[b])
             continue
         for m in range(d.env_member.shape[1]):
             if d.env_out[e, m] < 0.0:
@@ -252,13 +294,24 @@ def _classify_one(q, d, stop_at_unknown, work):
             verdict = _band(best, d.env_in[e, m], d.env_out[e, m])
             if verdict != FREE:
                 if verdict == COLLIDING or stop_at_unknown:
-                    return verdict
+                    return verdict, 0.0
                 state = UNKNOWN
+            elif lam[b] > 0.0:
+                radius = min(radius, (np.sqrt(best) - d.env_out_root[e, m]) / lam[b])
     for p in range(len(d.body_pair_reach2)):
-        if _gap2(bodies, d.body_pair[p, 0], bodies, d.body_pair[p, 1]) >= d.body_pair_reach2[p]:
+        a_body = d.body_pair[p, 0]
+        b_body = d.body_pair[p, 1]
+        speed = lam[len(d.body_step) + p]
+        gap2 = _gap2(bodies, a_body, bodies, b_body)
+        if gap2 >= d.body_pair_reach2[p]:
+            if speed > 0.0:
+                radius = min(radius, (np.sqrt(gap2) - d.body_pair_reach[p]) / speed)
             continue
         for k in range(d.body_pair_start[p], d.body_pair_start[p + 1]):
-            if _gap2(groups, d.pair_group[k, 0], groups, d.pair_group[k, 1]) >= d.pair_reach2[k]:
+            gap2 = _gap2(groups, d.pair_group[k, 0], groups, d.pair_group[k, 1])
+            if gap2 >= d.pair_reach2[k]:
+                if speed > 0.0:
+                    radius = min(radius, (np.sqrt(gap2) - d.pair_reach[k]) / speed)
                 continue
             for m in range(d.pair_a.shape[1]):
                 if d.pair_out[k, m] < 0.0:
@@ -272,12 +325,17 @@ def _classify_one(q, d, stop_at_unknown, work):
                 u = centres[i, 0] - centres[j, 0]
                 v = centres[i, 1] - centres[j, 1]
                 w = centres[i, 2] - centres[j, 2]
-                verdict = _band(u * u + v * v + w * w, d.pair_in[k, m], d.pair_out[k, m])
+                gap2 = u * u + v * v + w * w
+                verdict = _band(gap2, d.pair_in[k, m], d.pair_out[k, m])
                 if verdict != FREE:
                     if verdict == COLLIDING or stop_at_unknown:
-                        return verdict
+                        return verdict, 0.0
                     state = UNKNOWN
-    return state
+                elif speed > 0.0:
+                    radius = min(radius, (np.sqrt(gap2) - d.pair_out_root[k, m]) / speed)
+    if state != FREE:
+        return state, 0.0
+    return state, max(radius, 0.0)
 
 
 @njit(cache=True)
@@ -293,6 +351,8 @@ def _work(d):
         np.empty((len(d.group_step), 3)),
         np.empty((len(d.body_step), n_obj + 1), dtype=np.int64),
         np.zeros(1, dtype=np.int64),
+        np.zeros((len(d.body_step), 3)),  # the bodies' centres when their lists were made
+        np.full(len(d.body_step), -1.0),  # their margins to the far objects then (< 0: none)
     )
 
 
@@ -317,6 +377,7 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
         of every UNKNOWN sample before the segment's first blocking one.
     """
     work = _work(d)
+    still = np.zeros(len(d.body_step) + len(d.body_pair))  # no certificates needed here
     count = len(q_a)
     first = np.empty(count, dtype=np.int64)
     n = np.empty(count, dtype=np.int64)
@@ -336,7 +397,7 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
             t = (i + 1) / n[k]
             for j in range(q_a.shape[1]):
                 q[j] = q_a[k, j] + t * (q_b[k, j] - q_a[k, j])
-            s = _classify_one(q, d, stop_at_unknown, work)
+            s = _classify_one(q, d, stop_at_unknown, work, still)[0]
             if s == COLLIDING or (stop_at_unknown and s == UNKNOWN):
                 first[k] = i
                 break
@@ -347,8 +408,97 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
     return first, n, unknown_edge[:n_unknown], unknown_local[:n_unknown]
 
 
+@njit(cache=True)
+def edge_speeds(q_a, q_b, d, lam):
+    """Fills ``lam`` (L + Q,) with the speed bounds along the segment q_a -> q_b, m per rad of
+    joint-space L2 distance: each body's (the sum over the joints of its speed times the
+    direction's share), then each checked body pair's, the rate at which the distance between
+    their points may shrink. A joint moving both bodies of a pair turns them together and
+    keeps their distances: only the other joints count, each with both bodies' speeds.
+    Returns the segment's length, rad."""
+    length = 0.0
+    for j in range(len(q_a)):
+        length += (q_b[j] - q_a[j]) ** 2
+    length = np.sqrt(length)
+    for b in range(len(lam)):
+        total = 0.0
+        if length > 0.0:
+            for j in range(len(q_a)):
+                u = abs(q_b[j] - q_a[j]) / length
+                if u > 0.0:
+                    total += d.speed[b, j] * u
+        lam[b] = total
+    bodies = len(d.body_step)
+    for p in range(len(d.body_pair)):
+        a = d.body_pair[p, 0]
+        b = d.body_pair[p, 1]
+        total = 0.0
+        if length > 0.0:
+            for j in range(len(q_a)):
+                if d.speed[a, j] > 0.0 and d.speed[b, j] > 0.0:
+                    continue  # turns both bodies together
+                u = abs(q_b[j] - q_a[j]) / length
+                if u > 0.0:
+                    total += (d.speed[a, j] + d.speed[b, j]) * u
+        lam[bodies + p] = total
+    return length
+
+
+@njit(cache=True)
+def _near_any(q, anchors, radius):
+    """True when q is within ``radius`` (joint-space L2) of a row of ``anchors``."""
+    for k in range(len(anchors)):
+        total = 0.0
+        for j in range(len(q)):
+            total += (q[j] - anchors[k, j]) ** 2
+        if total <= radius * radius:
+            return True
+    return False
+
+
+@njit(cache=True)
+def edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius):
+    """Checks the samples t = i/n, i = 1..n, n = max(1, ceil(|q_b - q_a| / step)), of the
+    segment q_a -> q_b in order and returns (first, n): the index of the first blocking sample
+    (sample t = (first + 1) / n; n when none blocks). UNKNOWN blocks too, but within
+    ``anchor_radius`` (rad) of one of the ``anchors`` (K, 7): configurations Drake has found
+    free (a search's start and goal), whose neighbours the spheres often cannot decide; a
+    caller that lets those through must ask Drake about them later. The end sample, which may
+    become a waypoint, passes that way only when it is an anchor itself.
+
+    A FREE sample certifies every sample within its radius (``_classify_one``), which are
+    then skipped: in free space one check stands for many. ``lam``, ``q`` are scratch
+    arrays (L + Q,), (7,); ``counter[0]`` counts the configurations classified."""
+    length = edge_speeds(q_a, q_b, d, lam)
+    if not np.isfinite(length):
+        return 0, 1
+    n = max(1, int(np.ceil(length / step)))
+    h = length / n
+    i = 1
+    while i <= n:
+        t = i / n
+        for j in range(len(q_a)):
+            q[j] = q_a[j] + t * (q_b[j] - q_a[j])
+        state, radius = _classify_one(q, d, True, work, lam)
+        counter[0] += 1
+        if state != FREE:
+            # The end only when it is an anchor itself: it may become a waypoint.
+            reach = anchor_radius if i < n else 0.0
+            if state == UNKNOWN and _near_any(q, anchors, reach):
+                i += 1
+                continue
+            return i - 1, n
+        # Samples k h away with k h <= radius are certified (rounding kept on the safe side).
+        if h <= 0.0 or radius >= (n - i) * h:
+            break
+        i += int(radius * (1.0 - 1e-9) / h) + 1
+    return n, n
+
+
 # ------------------------------------------------------------------- compile note ----
-COMPILE_NOTE = "note: compiling the collision kernel once for this machine (about 10 s)..."
+COMPILE_NOTE = (
+    "note: compiling the collision kernel and planner once for this machine (about 30 s)..."
+)
 _announce_lock = threading.Lock()
 _announce_done = False  # announce_compile has looked, in this process
 
@@ -374,10 +524,11 @@ def cache_is_cold(dispatcher=None) -> bool:
         return False
 
 
-def announce_compile() -> bool:
-    """Prints ``COMPILE_NOTE`` on stderr when ``prefixes`` is about to be compiled
-    (``cache_is_cold``), at most once per process; only the first call looks at the cache,
-    later calls return at once. Call it just before calling ``prefixes``.
+def announce_compile(*others) -> bool:
+    """Prints ``COMPILE_NOTE`` on stderr when ``prefixes`` (or one of the ``others``
+    dispatchers) is about to be compiled (``cache_is_cold``), at most once per process; only the
+    first call looks at the cache, later calls return at once. Call it just before the first
+    call.
 
     Returns:
         True when it printed the note.
@@ -389,7 +540,7 @@ def announce_compile() -> bool:
         if _announce_done:
             return False
         _announce_done = True
-        if not cache_is_cold():
+        if not (cache_is_cold() or any(cache_is_cold(o) for o in others)):
             return False
     print(COMPILE_NOTE, file=sys.stderr, flush=True)
     return True

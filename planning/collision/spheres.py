@@ -42,6 +42,14 @@ from planning.model.panda import ATTACHMENT_BODY
 __all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
 _MARGIN = 1e-5  # m, added on the safe side of every comparison (covers rounding)
 _GROUP = 4  # spheres per culling group
+# KernelData's square roots of squared thresholds, by name (for the certificates' clearances).
+_ROOTS = {
+    "env_reach": "env_reach2",
+    "env_out_root": "env_out",
+    "body_pair_reach": "body_pair_reach2",
+    "pair_reach": "pair_reach2",
+    "pair_out_root": "pair_out",
+}
 
 
 class SphereCollisionModel:
@@ -109,12 +117,22 @@ class SphereCollisionModel:
                 self._filtered = filtered
                 self._build_robot(held)
                 self._held_signature = signature[1]
+            template = np.ascontiguousarray(self._template, dtype=float)
+            arm = np.asarray(self._arm, dtype=np.int64)
+            arrays = self._robot_arrays
             self._data = KernelData(
                 *self._kin.arrays(),
-                template=np.ascontiguousarray(self._template, dtype=float),
-                arm=np.asarray(self._arm, dtype=np.int64),
-                **self._robot_arrays,
+                template=template,
+                arm=arm,
+                **arrays,
                 objects=_primitives(world.values()),
+                speed=speed_table(
+                    *self._kin.arrays(), template, arm, arrays["body_step"], self._point_norm
+                ),
+                **{
+                    name: np.sqrt(np.maximum(arrays[squared], 0.0))
+                    for name, squared in _ROOTS.items()
+                },
             )
 
     def _build_robot(self, held) -> None:
@@ -126,6 +144,7 @@ class SphereCollisionModel:
         present = list(sets)
         owner = np.concatenate([np.full(len(sets[b].radius), b) for b in present])
         self._slot = np.array([slot[b] for b in owner], dtype=int)
+        self._sphere_body = np.array([present.index(b) for b in owner], dtype=int)
         p_BS = np.vstack([sets[b].p_BS for b in present])
         radius = np.concatenate([sets[b].radius for b in present])
         inner = np.concatenate([sets[b].inner for b in present])
@@ -154,11 +173,23 @@ class SphereCollisionModel:
         r_out = radius[members[env]] + np.maximum(pad, 0.0) + _MARGIN
         r_in = inner[members[env]]
         body_radius = np.array([r for _, r in body_bounds])
+        # How far from its body's origin any point the checks use lies (speed_table).
+        body_centre = np.array([c for c, _ in body_bounds]).reshape(-1, 3)
+        self._point_norm = np.array(
+            [
+                max(
+                    np.linalg.norm(body_centre[k]),
+                    np.linalg.norm(group_centre[group_body == k], axis=1).max(initial=0.0),
+                    np.linalg.norm(p_BS[owner == b], axis=1).max(initial=0.0),
+                )
+                for k, b in enumerate(present)
+            ]
+        )
         arrays = dict(
             sphere_step=step[self._slot],
             p_BS=p_BS,
             body_step=step[[slot[b] for b in present]],
-            p_BL=np.array([c for c, _ in body_bounds]).reshape(-1, 3),
+            p_BL=body_centre,
             body_reach=body_radius + np.maximum(world_pad, 0.0) + _MARGIN,
             group_step=step[[slot[b] for b, _ in groups]],
             p_BG=group_centre,
@@ -261,6 +292,32 @@ class SphereCollisionModel:
         self.sync()
         return self.supported and self._objects_ok
 
+    def kernel_data(self) -> KernelData:
+        """The arrays the compiled kernels read, in sync with the scene (``active`` only)."""
+        self.sync()
+        _kernel.announce_compile()
+        return self._data
+
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """The arm's lower and upper joint limits, (7,) each, rad."""
+        plant = self._scene.plant
+        return (
+            plant.GetPositionLowerLimits()[self._arm].copy(),
+            plant.GetPositionUpperLimits()[self._arm].copy(),
+        )
+
+    def drake_free(self, qs) -> np.ndarray:
+        """Drake's checker on each row of qs (N, 7): True where collision-free."""
+        scene = self._scene
+        check = scene.checker.CheckConfigCollisionFree
+        return np.array([check(scene.full_q(q)) for q in np.atleast_2d(qs)], dtype=bool)
+
+    @property
+    def sphere_bodies(self) -> np.ndarray:
+        """The body (row of ``KernelData.speed``) of each sphere, (S,)."""
+        self.sync()
+        return self._sphere_body.copy()
+
     @property
     def num_spheres(self) -> int:
         return len(self._radius)
@@ -305,6 +362,42 @@ class SphereCollisionModel:
             return np.zeros(len(n), dtype=np.int64), n, np.zeros(0, int), np.zeros(0, int)
         edge = np.repeat(np.arange(len(n)), n)
         return n.copy(), n, edge, np.arange(len(edge)) - np.repeat(np.cumsum(n) - n, n)
+
+
+def speed_table(parent, kind, q_index, terms, template, arm, body_step, point_norm):
+    """A bound on the speed of the points of each body per rad of each arm joint, (L, 7), m/rad,
+    valid in every configuration (``KernelData.speed``).
+
+    Step s of the tree maps a point p of its child frame to X_PC(q) [p; 1] with
+    X_PC = A + a B + b C (``sphere_fk``); for a revolute joint its derivative in q is
+    (cos q B - sin q C) [p; 1], no longer than |[B; C] [p; 1]| <= sigma |p| + |t|, where sigma
+    is the largest singular value of the stacked rotation parts of B and C (6 x 3) and t their
+    stacked translations. The parent frame moves rigidly with the rest of the tree, so that is
+    also the point's speed in the world. |p| in step s's frame is at most the point's distance
+    from its body's origin (``point_norm``) plus the largest translation of every step between
+    them. A prismatic arm joint gets no bound (inf)."""
+    arm_of = {int(k): j for j, k in enumerate(arm)}
+    speed = np.zeros((len(body_step), len(arm)))
+    for b, step in enumerate(body_step):
+        reach = float(point_norm[b])
+        s = int(step)
+        while s >= 0:
+            A, B, C = terms[s]
+            moving = kind[s] != 0 and int(q_index[s]) in arm_of
+            if moving and kind[s] == 1:
+                sigma = np.linalg.norm(np.vstack([B[:, :3], C[:, :3]]), 2)
+                shift = np.linalg.norm(np.concatenate([B[:, 3], C[:, 3]]))
+                speed[b, arm_of[int(q_index[s])]] = sigma * reach + shift
+                reach += np.linalg.norm(A[:, 3]) + shift
+            elif moving:
+                speed[b, arm_of[int(q_index[s])]] = np.inf
+                reach = np.inf
+            else:  # a weld or a joint held at the template's position
+                a = 0.0 if kind[s] == 0 else template[q_index[s]]
+                a, c = (np.sin(a), np.cos(a)) if kind[s] == 1 else (a, 0.0)
+                reach += np.linalg.norm(A[:, 3] + a * B[:, 3] + c * C[:, 3])
+            s = int(parent[s])
+    return np.ascontiguousarray(speed)
 
 
 def _squared(reach: np.ndarray) -> np.ndarray:

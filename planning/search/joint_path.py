@@ -1,7 +1,15 @@
 """The joint path pipeline of ``MotionPlanner``: from two collision-free configurations to a path
 checked at the fine resolution.
 
-``JointPathSearch.find`` tries the straight line; otherwise GCS (when regions are set) or
+With sphere models (``spheres.enabled``, every shape covered) and neither GCS nor KTO,
+``JointPathSearch.find`` first runs the whole search in one compiled call on the spheres alone
+(``planning.search.compiled_rrt``: straight line, RRT-Connect, shortcutting), then checks the
+result at ``validation.resolution`` there too, asking Drake only about the samples the spheres
+cannot decide. When that search gives up (``spheres.drake_fallback_after`` configurations) or
+its path fails the fine check, the Python pipeline below takes over, with Drake deciding what
+the spheres cannot from the start.
+
+The Python pipeline tries the straight line; otherwise GCS (when regions are set) or
 RRT-Connect with restarts (its run times are heavy-tailed), then shortcutting. The path is then
 re-checked at ``validation.resolution``: a failing segment is re-planned on fine edge checks, at
 most ``validation.max_repairs`` times, or the whole path when a segment cannot be repaired; KTO
@@ -17,9 +25,11 @@ import time
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
-from planning.collision.sphere_checker import SphereCheckerAdapter
+from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
+from planning.collision.spheres import FREE
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
+from planning.search import compiled_rrt
 from planning.search.rrt import rrt_connect
 from planning.search.shortcut import shortcut
 
@@ -55,11 +65,45 @@ class JointPathSearch:
             resolution = opts.search_resolution
         return SphereCheckerAdapter(self._scene, resolution, slack=opts.slack, fallback_after=after)
 
+    def _sphere_model(self):
+        """The scene's sphere model when it can answer (spheres enabled, all shapes covered),
+        else None."""
+        opts = self._options.spheres
+        if not opts.enabled:
+            return None
+        model = sphere_model(self._scene, opts.slack)
+        return model if model.active else None
+
+    def prepare(self) -> None:
+        """Syncs the sphere model with the scene and has the compiled search ready (see
+        ``MotionPlanner.prepare``)."""
+        model = self._sphere_model()
+        if model is not None:
+            compiled_rrt.warm_up(model.kernel_data(), *model.joint_limits())
+
+    def proves_free(self, q) -> bool:
+        """True when the sphere model proves the arm configuration q (7,) collision-free (then
+        Drake's checker finds it free too); False when it cannot tell or there is none."""
+        model = self._sphere_model()
+        return model is not None and bool(model.classify(q)[0] == FREE)
+
     def find(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
         opts = self._options
+        if time.perf_counter() > deadline:
+            raise self._failure(deadline, "no time was left to search")
+        # The compiled search is not timed: it stops after spheres.drake_fallback_after checks
+        # (0.1 to 0.2 s on this project's VM), then the deadline applies again.
+        compiled = self._compiled(q_start, q_goal)
+        if compiled is not None and compiled[0] is not None:
+            return compiled[0], compiled[1]
         adapter = self.adapter(search=True)
         fine = self.adapter(opts.validation.resolution)
         rng = np.random.default_rng(opts.seed)
+        if compiled is not None:  # the compiled search's path failed the fine check: repair it
+            _, how, path = compiled
+            if path is not None:
+                return self._validated(fine, path, how, deadline, rng)
+            adapter.counts["spheres"] += opts.spheres.drake_fallback_after  # Drake from the start
         how = "straight"
         path = np.vstack([q_start, q_goal])
         if not adapter.edge_free(q_start, q_goal):
@@ -83,6 +127,76 @@ class JointPathSearch:
         if opts.kto.enabled and how != "straight":
             path, how = self._refined(path, how)
         return path, how
+
+    def _compiled(self, q_start, q_goal):
+        """The compiled search and its fine check (``planning.search.compiled_rrt``), with up
+        to ``validation.max_repairs`` compiled repairs of a segment that fails it.
+
+        Returns:
+            None when it does not apply (no sphere model, GCS or KTO in use); else (path, how,
+            None) for a checked path, (None, how, path) for a path that still fails the fine
+            check, or (None, "rrt_connect", None) when the search gave up.
+        """
+        opts = self._options
+        model = self._sphere_model()
+        if model is None or self.gcs is not None or opts.kto.enabled:
+            return None
+        data = model.kernel_data()
+        lower, upper = model.joint_limits()
+        rng = compiled_rrt.seed_state(opts.seed)
+
+        def search(q_a, q_b, edge_step, step, anchor_radius):
+            return compiled_rrt.plan(
+                np.asarray(q_a, dtype=float),
+                np.asarray(q_b, dtype=float),
+                lower,
+                upper,
+                data,
+                edge_step,
+                step,
+                opts.rrt.goal_bias,
+                opts.spheres.drake_fallback_after,
+                opts.shortcut.iterations,
+                rng,
+                anchor_radius,
+            )
+
+        spheres, fine = opts.spheres, opts.validation.resolution
+        status, path, how, _ = search(
+            q_start, q_goal, spheres.search_resolution, opts.rrt.step, spheres.anchor_radius
+        )
+        name = "straight" if how == 0 else "rrt_connect"
+        if status != compiled_rrt.FOUND:
+            return None, "rrt_connect", None
+        for repair in range(opts.validation.max_repairs + 1):
+            bad = self._first_failing_segment(model, path, fine, data)
+            if bad < 0:
+                return path, name, None
+            if repair == opts.validation.max_repairs:
+                break
+            # Re-plan the segment on fine edges, the spheres alone deciding (nothing to ask).
+            status, piece, _, _ = search(
+                path[bad], path[bad + 1], fine, opts.validation.repair_step, 0.0
+            )
+            if status != compiled_rrt.FOUND:
+                break
+            path = np.vstack([path[:bad], piece, path[bad + 2 :]])
+            name = "rrt_connect+repaired"
+        return None, name, path
+
+    @staticmethod
+    def _first_failing_segment(model, path, resolution: float, data) -> int:
+        """The first segment of the path with a sample at ``resolution`` that the spheres
+        prove colliding or that Drake finds colliding among those they cannot decide; -1 when
+        none."""
+        bad, unknown, segment, _ = compiled_rrt.fine_check(path, resolution, data)
+        if len(unknown):
+            if bad >= 0:  # only samples before the colliding segment matter
+                unknown, segment = unknown[segment < bad], segment[segment < bad]
+            blocked = segment[~model.drake_free(unknown)]
+            if len(blocked):
+                return int(blocked.min())
+        return int(bad)
 
     def _shortcut(self, adapter, path: np.ndarray, deadline: float, rng) -> np.ndarray:
         """Shortcuts a path with ``shortcut.time_fraction`` of the time left."""

@@ -155,7 +155,7 @@ def test_profile_prints_the_breakdown(capsys):
     assert mut.main(["--families", "cage_panda", "--limit", "2", "--profile"]) == 0
     out = capsys.readouterr().out
     assert "profile over 2 requests" in out and "tail only" in out
-    assert "validate 0.01 rad" in out and "checks per request" in out
-    assert "SphereCollisionModel.prefixes" in out
+    assert "compiled: fine check on spheres" in out and "checks per request" in out
+    assert "compiled_rrt.plan" in out and "compiled configurations" in out
     # The wrappers are gone afterwards.
     assert mut.MotionPlanner.plan_path.__module__ == "planning.motion_planner"

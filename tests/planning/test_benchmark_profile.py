@@ -31,8 +31,12 @@ def test_rows_sum_to_the_request_and_wrappers_are_removed(planner):
     assert times["total"] == total
     assert sum(t for row, t in times.items() if row != "total") == pytest.approx(total)
     assert all(t >= 0 for t in times.values())
-    assert "start/goal check: drake" in times and "request: python" in times
-    assert record["calls"]["CollisionChecker.CheckConfigCollisionFree"] >= 2  # start, goal
+    # In free space the spheres prove the start and the goal free, and the compiled search
+    # finds and checks the straight line: Drake is not asked.
+    assert "start/goal check: spheres" in times and "request: python" in times
+    assert "compiled: search on spheres" in times and "compiled: fine check on spheres" in times
+    assert record["calls"]["SphereCollisionModel.classify"] >= 2  # start, goal
+    assert "CollisionChecker.CheckConfigCollisionFree" not in record["calls"]
     assert record["name"] == "free space"
 
 

@@ -22,8 +22,8 @@ def test_defaults_are_the_documented_values():
     """The values config/planner.yaml held before the dataclass defaults replaced it."""
     o = mut.MotionPlannerOptions()
     assert (o.timeout, o.seed) == (5.0, 0)
-    assert o.rrt == mut.RrtConnectOptions(step=1.0, goal_bias=0.05, batch=16, restart_interval=10.0)
-    assert o.shortcut == mut.ShortcutOptions(iterations=20, time_fraction=0.2)
+    assert o.rrt == mut.RrtConnectOptions(step=0.5, goal_bias=0.05, batch=16, restart_interval=10.0)
+    assert o.shortcut == mut.ShortcutOptions(iterations=50, time_fraction=0.2)
     assert o.validation == mut.ValidationOptions(
         resolution=0.01, max_repairs=3, repair_timeout=0.5, repair_step=0.25
     )
@@ -37,7 +37,11 @@ def test_defaults_are_the_documented_values():
     )
     assert o.kto == mut.KtoOptions(enabled=False)
     assert o.spheres == mut.SphereCheckOptions(
-        enabled=True, slack=0.015, drake_fallback_after=50_000, search_resolution=0.1
+        enabled=True,
+        slack=0.015,
+        drake_fallback_after=50_000,
+        search_resolution=0.1,
+        anchor_radius=0.15,
     )
     o.check()
 
@@ -123,6 +127,8 @@ BAD_VALUES = [
     ("spheres", "slack", 0.0),
     ("spheres", "drake_fallback_after", -1),
     ("spheres", "search_resolution", 0.0),
+    ("spheres", "anchor_radius", -0.1),
+    ("spheres", "anchor_radius", float("inf")),
 ]
 
 

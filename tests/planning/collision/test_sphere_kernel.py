@@ -212,3 +212,89 @@ def test_a_non_finite_configuration_is_never_free(scene, bad):
     assert np.all(first == 1)  # not certainly colliding either: left to Drake
     np.testing.assert_array_equal(edge, np.arange(7))
     np.testing.assert_array_equal(local, 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Certificates: a FREE configuration's radius is how far it may move along a direction with
+# every sphere staying FREE; it rests on the speed table's bound on how fast points move.
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def cluttered():
+    """The pick-and-place scene's table and a box near the hand at "ready"."""
+    import numpy as np
+    from pydrake.math import RigidTransform
+
+    from planning import PlanningScene
+    from planning.collision.sphere_checker import sphere_model
+
+    scene = PlanningScene()
+    ready = scene.model.named_configurations["ready"]
+    p = scene.attachment_pose(ready).translation() + np.array([0.15, 0.0, 0.0])
+    scene.add_box("box", [0.1, 0.1, 0.3], RigidTransform(p))
+    model = sphere_model(scene)
+    return scene, model, model.kernel_data()
+
+
+def test_points_move_no_faster_than_the_speed_table_says(cluttered):
+    import numpy as np
+
+    scene, model, d = cluttered
+    lower, upper = model.joint_limits()
+    rng = np.random.default_rng(0)
+    h = 1e-6
+    for q in rng.uniform(lower, upper, (200, 7)):
+        p0, _ = model.sphere_centres(q[None])
+        for j in range(7):
+            p1, _ = model.sphere_centres((q + h * np.eye(7)[j])[None])
+            speed = np.linalg.norm(p1[0] - p0[0], axis=1) / h  # (S,) m/rad
+            bound = d.speed[model.sphere_bodies, j]
+            assert np.all(speed <= bound * (1 + 1e-6) + 1e-9)
+
+
+def test_a_free_configuration_stays_free_within_its_radius(cluttered):
+    import numpy as np
+
+    scene, model, d = cluttered
+    lower, upper = model.joint_limits()
+    rng = np.random.default_rng(1)
+    work = mut._work(d)
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    radii = []
+    for q in rng.uniform(lower, upper, (400, 7)):
+        u = rng.normal(size=7)
+        u /= np.linalg.norm(u)
+        mut.edge_speeds(q, q + u, d, lam)
+        state, radius = mut._classify_one(q, d, False, work, lam)
+        if state != mut.FREE:
+            assert radius == 0.0
+            continue
+        radii.append(radius)
+        for f in (-1.0, -0.5, 0.5, 0.999):
+            assert mut._classify_one(q + f * radius * u, d, False, work, lam)[0] == mut.FREE
+    assert len(radii) > 100 and np.median(radii) > 0.002  # certificates that skip samples
+
+
+def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
+    """The certified march finds the same first blocking sample as checking all of them."""
+    import numpy as np
+
+    scene, model, d = cluttered
+    lower, upper = model.joint_limits()
+    rng = np.random.default_rng(2)
+    work = mut._work(d)
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    counter = np.zeros(1, dtype=np.int64)
+    fewer = 0
+    for _ in range(60):
+        q_a, q_b = rng.uniform(lower, upper, (2, 7))
+        q_b = q_a + 0.5 * (q_b - q_a)
+        first, n = mut.edge_prefix(
+            q_a, q_b, 0.01, d, work, lam, np.empty(7), counter, np.empty((0, 7)), 0.0
+        )
+        every, n_every, _, _ = mut.prefixes(q_a[None], q_b[None], 0.01, True, d)
+        assert (first, n) == (every[0], n_every[0])
+        fewer += counter[0] < min(first + 1, n)
+        counter[0] = 0
+    assert fewer > 10

@@ -6,32 +6,14 @@ import time
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
 
 import planning.search.joint_path as mut
-from planning import ErrorCode, MotionPlannerOptions, PlanningError, PlanningScene
+from planning import ErrorCode, MotionPlannerOptions, PlanningError
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.collision.sphere_checker import SphereCheckerAdapter
 
 E = np.eye(7)
 FINE = 0.01  # rad
-
-
-@pytest.fixture(scope="module")
-def scene():
-    """The table and a wall around the hand at "ready", between the two ends."""
-    scene = PlanningScene()
-    ready = scene.model.named_configurations["ready"]
-    scene.add_box(
-        "wall", [0.1, 0.1, 0.3], RigidTransform(scene.attachment_pose(ready).translation())
-    )
-    return scene
-
-
-@pytest.fixture(scope="module")
-def ends(scene):
-    ready = scene.model.named_configurations["ready"]
-    return ready - 0.8 * E[0], ready + 0.8 * E[0]
 
 
 @pytest.fixture(scope="module")
@@ -81,3 +63,58 @@ def test_no_time_left_is_timed_out(dut, ends):
     with pytest.raises(PlanningError) as info:
         dut.find(*ends, time.perf_counter() - 1.0)
     assert info.value.code is ErrorCode.TIMED_OUT
+
+
+# ---------------------------------------------------------------------------------------------
+# The compiled search runs first with sphere models; the Python pipeline takes over when it
+# gives up, and a compiled path that fails the fine check is repaired.
+# ---------------------------------------------------------------------------------------------
+
+
+def test_the_compiled_search_runs_first_and_one_seed_gives_one_path(scene, dut, ends, monkeypatch):
+    calls = []
+    monkeypatch.setattr(mut, "rrt_connect", lambda *a, **k: calls.append(1))
+    first, how = dut.find(*ends, deadline())
+    again, _ = dut.find(*ends, deadline())
+    assert how == "rrt_connect" and not calls  # the Python RRT-Connect never ran
+    np.testing.assert_array_equal(first, again)
+    assert first_invalid_segment(CheckerAdapter(scene), first, FINE) is None
+
+
+def test_when_the_compiled_search_gives_up_the_python_pipeline_asks_drake(scene, ends):
+    options = MotionPlannerOptions()
+    options.spheres.drake_fallback_after = 3  # the compiled search gives up at once
+    dut = mut.JointPathSearch(scene, options)
+    path, how = dut.find(*ends, deadline())
+    assert how.startswith("rrt_connect")
+    assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
+
+
+def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
+    scene, dut, ends, monkeypatch
+):
+    """The search's path is replaced by the straight line through the box: the fine check
+    finds the collision and a compiled re-plan of that segment mends it."""
+    real = mut.compiled_rrt.plan
+    first = []
+
+    def through_the_box(q_a, q_b, *args):
+        if not first:
+            first.append(1)
+            return mut.compiled_rrt.FOUND, np.vstack([q_a, q_b]), 1, 0
+        return real(q_a, q_b, *args)
+
+    monkeypatch.setattr(mut.compiled_rrt, "plan", through_the_box)
+    monkeypatch.setattr(mut, "rrt_connect", lambda *a, **k: pytest.fail("Python RRT ran"))
+    path, how = dut.find(*ends, deadline())
+    assert how == "rrt_connect+repaired" and len(path) > 2
+    assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
+
+
+def test_the_spheres_prove_free_what_drake_finds_free(scene, dut, ends):
+    ready = scene.model.named_configurations["ready"]
+    assert dut.proves_free(ends[0]) and scene.is_collision_free(ends[0])
+    assert not dut.proves_free(ready)  # inside the box
+    options = MotionPlannerOptions()
+    options.spheres.enabled = False
+    assert not mut.JointPathSearch(scene, options).proves_free(ends[0])  # no model: no proof

@@ -9,33 +9,14 @@ import time
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
 
 import planning.search.rrt as mut
-from planning import PlanningScene
 from planning.collision.checker import CheckerAdapter
 from planning.collision.sphere_checker import SphereCheckerAdapter
 from planning.paths import densify
 
 E = np.eye(7)
 FINE = 0.01  # rad
-
-
-@pytest.fixture(scope="module")
-def scene():
-    """The table and a wall around the hand at "ready", between the start and the goal."""
-    scene = PlanningScene()
-    ready = scene.model.named_configurations["ready"]
-    scene.add_box(
-        "wall", [0.1, 0.1, 0.3], RigidTransform(scene.attachment_pose(ready).translation())
-    )
-    return scene
-
-
-@pytest.fixture(scope="module")
-def ends(scene):
-    ready = scene.model.named_configurations["ready"]
-    return ready - 0.8 * E[0], ready + 0.8 * E[0]
 
 
 def plan(scene, ends, seed, step=0.5, goal_bias=0.05, adapter=None, batch=1):

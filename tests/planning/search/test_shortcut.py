@@ -6,32 +6,14 @@ import time
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
 
 import planning.search.shortcut as mut
-from planning import PlanningScene
 from planning.collision.sphere_checker import SphereCheckerAdapter
 from planning.paths import densify, path_length
 from planning.search.rrt import rrt_connect
 
 E = np.eye(7)
 FINE = 0.01  # rad
-
-
-@pytest.fixture(scope="module")
-def scene():
-    """The table and a wall around the hand at "ready", between the start and the goal."""
-    scene = PlanningScene()
-    ready = scene.model.named_configurations["ready"]
-    X_WO = RigidTransform(scene.attachment_pose(ready).translation())
-    scene.add_box("wall", [0.1, 0.1, 0.3], X_WO)
-    return scene
-
-
-@pytest.fixture(scope="module")
-def ends(scene):
-    ready = scene.model.named_configurations["ready"]
-    return ready - 0.8 * E[0], ready + 0.8 * E[0]
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,130 @@
+"""The compiled search (planning.search.compiled_rrt): the straight line when free, RRT-Connect
+and shortcutting around an obstacle with every segment free for Drake's checker at 0.01 rad, one
+seed one path, a check budget that ends the search, the fine check's verdicts, and the
+generator's numbers."""
+
+import numpy as np
+import pytest
+
+import planning.search.compiled_rrt as mut
+from planning.collision.checker import CheckerAdapter, first_invalid_segment
+from planning.collision.sphere_checker import sphere_model
+from planning.paths import path_length
+
+E = np.eye(7)
+FINE = 0.01  # rad
+
+
+@pytest.fixture(scope="module")
+def data(scene):
+    return sphere_model(scene).kernel_data()
+
+
+@pytest.fixture(scope="module")
+def limits(scene):
+    return sphere_model(scene).joint_limits()
+
+
+def search(data, limits, q_a, q_b, seed=0, max_checks=50_000, iterations=20, anchor_radius=0.0):
+    return mut.plan(
+        q_a,
+        q_b,
+        *limits,
+        data,
+        0.1,
+        1.0,
+        0.05,
+        max_checks,
+        iterations,
+        mut.seed_state(seed),
+        anchor_radius,
+    )
+
+
+def test_a_free_straight_line_is_the_path(data, limits, ends):
+    q_a = ends[0]
+    status, path, how, checks = search(data, limits, q_a, q_a - 0.2 * E[0])
+    assert status == mut.FOUND and how == 0 and checks >= 1
+    np.testing.assert_array_equal(path, [q_a, q_a - 0.2 * E[0]])
+
+
+def test_around_an_obstacle_every_segment_is_free_for_drake(scene, data, limits, ends):
+    q_a, q_b = ends
+    assert not CheckerAdapter(scene).edge_free(q_a, q_b)  # the box is in the way
+    status, path, how, _ = search(data, limits, q_a, q_b)
+    assert status == mut.FOUND and how == 1
+    np.testing.assert_array_equal(path[0], q_a)
+    np.testing.assert_array_equal(path[-1], q_b)
+    bad, unknown, _, checks = mut.fine_check(path, FINE, data)
+    assert bad == -1 and checks > 0
+    assert all(scene.is_collision_free(q) for q in unknown)
+    assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
+    # Shortcutting left no waypoint it could skip: the path is far shorter than a tree walk.
+    assert path_length(path) < 3.0 * np.linalg.norm(q_b - q_a)
+
+
+def test_one_seed_gives_one_path(data, limits, ends):
+    first = search(data, limits, *ends, seed=3)[1]
+    np.testing.assert_array_equal(search(data, limits, *ends, seed=3)[1], first)
+    assert not np.array_equal(search(data, limits, *ends, seed=4)[1], first)
+
+
+def test_the_check_budget_ends_the_search(data, limits, ends):
+    status, path, _, checks = search(data, limits, *ends, max_checks=5)
+    assert status == mut.GAVE_UP and len(path) == 0
+    assert 5 <= checks < 100  # the round that crossed the budget finishes
+
+
+def test_the_fine_check_names_the_colliding_segment(scene, data, ends):
+    q_a, q_b = ends
+    ready = scene.model.named_configurations["ready"]
+    path = np.array([q_a, q_a + 0.1 * E[1], q_b])  # the second segment crosses the box
+    assert not scene.is_collision_free(ready)
+    bad, _, _, _ = mut.fine_check(path, FINE, data)
+    assert bad == 1
+
+
+def test_the_fine_check_certifies_whole_runs_of_samples(data, ends):
+    """In the open a FREE sample's clearance covers many 0.01 rad samples at once."""
+    q_a = ends[0]
+    path = np.array([q_a, q_a - 0.5 * E[0]])
+    bad, unknown, _, checks = mut.fine_check(path, FINE, data)
+    assert bad == -1 and len(unknown) == 0
+    assert checks < 50  # of 50 samples
+
+
+def test_the_generator_is_the_same_everywhere():
+    state = mut.seed_state(0)
+    assert state.dtype == np.uint64 and state[0] != 0
+    draws = [mut._uniform(state) for _ in range(1000)]
+    assert all(0.0 <= x < 1.0 for x in draws)
+    assert abs(np.mean(draws) - 0.5) < 0.05
+    # Fixed numbers: xorshift64* seeded by SplitMix64 is plain integer arithmetic.
+    again = mut.seed_state(0)
+    assert [mut._uniform(again) for _ in range(3)] == draws[:3]
+    assert mut.seed_state(1)[0] != mut.seed_state(0)[0]
+
+
+def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
+    """A configuration the spheres cannot decide blocks an edge ending there, unless it lies
+    within the anchor radius of the search's start or goal."""
+    from planning.collision.spheres import UNKNOWN
+
+    model = sphere_model(scene)
+    rng = np.random.default_rng(5)
+    qs = rng.uniform(*limits, (4000, 7))
+    undecided = qs[model.classify(qs) == UNKNOWN][0]
+    free = next(q for q in qs if model.classify(q)[0] == 0 and np.linalg.norm(q - undecided) > 0.5)
+    scratch = (
+        mut._work(data),
+        np.zeros(len(data.body_step) + len(data.body_pair)),
+        np.empty(7),
+        np.zeros(1, dtype=np.int64),
+    )
+    strict = (*scratch, np.empty((0, 7)), 0.0)
+    anchored = (*scratch, undecided[None, :], 0.05)
+    # The end (the undecided configuration) is checked first.
+    assert not mut._free(free, undecided, 0.1, data, strict)
+    assert not mut._free(undecided + 0.1, undecided, 0.1, data, (*scratch, free[None, :], 0.05))
+    end_ok = mut._free(undecided, undecided, 0.1, data, anchored)
+    assert end_ok
