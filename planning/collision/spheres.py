@@ -83,6 +83,7 @@ class SphereCollisionModel:
             ]
             self._robot = robot_spheres(plant, query.inspector(), bodies, slack)
             self._bodies = [*self._robot, self._attachment]
+            self._unfiltered = _unfiltered_in_model(plant, query.inspector(), self._bodies)
             self._kin = BatchedKinematics(plant, self._bodies)
         except NotImplementedError:
             self.supported = False
@@ -255,24 +256,17 @@ class SphereCollisionModel:
         both); a body whose shapes were added to the checker only (a held object) is checked
         against every body the checker does not filter."""
         plant = self._scene.plant
-        inspector = self._scene.checker.MakeStandaloneModelContext().GetQueryObject().inspector()
-        geometries = {
-            b: plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b))) for b in present
+        modelled = {
+            b for b in present if plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b)))
         }
         pairs = set()
         for i, a in enumerate(present):
             for b in present[i + 1 :]:
                 if self._filtered[a, b] != 0:
                     continue
-                if not geometries[a] or not geometries[b]:
-                    # Shapes added to the checker (held objects, on the attachment body) are
-                    # not in its SceneGraph model: only the checker's own filter applies.
-                    pairs.add((a, b))
-                elif any(
-                    not inspector.CollisionFiltered(g, h)
-                    for g in geometries[a]
-                    for h in geometries[b]
-                ):
+                # Shapes added to the checker (held objects, on the attachment body) are not in
+                # its SceneGraph model: only the checker's own filter applies to them.
+                if a not in modelled or b not in modelled or (a, b) in self._unfiltered:
                     pairs.add((a, b))
         return pairs
 
@@ -377,27 +371,46 @@ def speed_table(parent, kind, q_index, terms, template, arm, body_step, point_no
     from its body's origin (``point_norm``) plus the largest translation of every step between
     them. A prismatic arm joint gets no bound (inf)."""
     arm_of = {int(k): j for j, k in enumerate(arm)}
+    A, B, C = terms[:, 0], terms[:, 1], terms[:, 2]  # (J, 3, 4) each
+    sigma = np.linalg.norm(np.concatenate([B[:, :, :3], C[:, :, :3]], axis=1), 2, axis=(1, 2))
+    shift = np.linalg.norm(np.concatenate([B[:, :, 3], C[:, :, 3]], axis=1), axis=1)
+    # The largest translation of each step: a joint of the arm anywhere, another at the
+    # template's position (a weld has a = b = 0).
+    held = np.where(kind == 0, 0.0, template[q_index])
+    a = np.where(kind == 1, np.sin(held), held)
+    c = np.where(kind == 1, np.cos(held), 0.0)
+    fixed = np.linalg.norm(A[:, :, 3] + a[:, None] * B[:, :, 3] + c[:, None] * C[:, :, 3], axis=1)
+    moving = np.array([kind[s] != 0 and int(q_index[s]) in arm_of for s in range(len(kind))])
+    largest = np.where(moving, np.linalg.norm(A[:, :, 3], axis=1) + shift, fixed)
+    largest[moving & (kind == 2)] = np.inf  # a prismatic arm joint: no bound
     speed = np.zeros((len(body_step), len(arm)))
     for b, step in enumerate(body_step):
         reach = float(point_norm[b])
         s = int(step)
         while s >= 0:
-            A, B, C = terms[s]
-            moving = kind[s] != 0 and int(q_index[s]) in arm_of
-            if moving and kind[s] == 1:
-                sigma = np.linalg.norm(np.vstack([B[:, :3], C[:, :3]]), 2)
-                shift = np.linalg.norm(np.concatenate([B[:, 3], C[:, 3]]))
-                speed[b, arm_of[int(q_index[s])]] = sigma * reach + shift
-                reach += np.linalg.norm(A[:, 3]) + shift
-            elif moving:
-                speed[b, arm_of[int(q_index[s])]] = np.inf
-                reach = np.inf
-            else:  # a weld or a joint held at the template's position
-                a = 0.0 if kind[s] == 0 else template[q_index[s]]
-                a, c = (np.sin(a), np.cos(a)) if kind[s] == 1 else (a, 0.0)
-                reach += np.linalg.norm(A[:, 3] + a * B[:, 3] + c * C[:, 3])
+            if moving[s]:
+                speed[b, arm_of[int(q_index[s])]] = (
+                    sigma[s] * reach + shift[s] if kind[s] == 1 else np.inf
+                )
+            reach += largest[s]
             s = int(parent[s])
     return np.ascontiguousarray(speed)
+
+
+def _unfiltered_in_model(plant, inspector, bodies) -> set[tuple[int, int]]:
+    """Pairs (a, b) of ``bodies`` (in that order) with a pair of collision geometries that the
+    SceneGraph model does not filter. Read once: later changes go to the checker's own filter
+    matrix (``allow_collision``, held objects) or concern shapes the checker adds, never the
+    model's robot geometries."""
+    geometries = {
+        b: plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b))) for b in bodies
+    }
+    return {
+        (a, b)
+        for i, a in enumerate(bodies)
+        for b in bodies[i + 1 :]
+        if any(not inspector.CollisionFiltered(g, h) for g in geometries[a] for h in geometries[b])
+    }
 
 
 def _squared(reach: np.ndarray) -> np.ndarray:
