@@ -128,3 +128,42 @@ def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
     assert not mut._free(undecided + 0.1, undecided, 0.1, data, (*scratch, free[None, :], 0.05))
     end_ok = mut._free(undecided, undecided, 0.1, data, anchored)
     assert end_ok
+
+
+class _FakeDispatcher:
+    """Stands in for a numba dispatcher with a cache: counts flushes."""
+
+    def __init__(self):
+        self.flushes = 0
+        self._cache = self
+
+    def py_func(self):
+        pass
+
+    def flush(self):
+        self.flushes += 1
+
+
+def test_a_changed_kernel_source_empties_the_cache(tmp_path, monkeypatch):
+    import types
+
+    source = tmp_path / "planner.py"
+    source.write_text("one")
+    dispatcher = _FakeDispatcher()
+    module = types.SimpleNamespace(__file__=str(source), plan=dispatcher)
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    mut._refresh_cache(module, cache)  # no hash yet: emptied, hash written
+    mut._refresh_cache(module, cache)  # same sources: kept
+    assert dispatcher.flushes == 1
+    source.write_text("two")  # (the kernel's source is hashed with it the same way)
+    mut._refresh_cache(module, cache)
+    assert dispatcher.flushes == 2
+    source.write_text("three")
+
+    def read_only(*args, **kwargs):
+        raise PermissionError("read-only")
+
+    monkeypatch.setattr(mut.Path, "write_text", read_only)  # the functions are not cached at all
+    mut._refresh_cache(module, cache)
+    assert isinstance(dispatcher._cache, mut.NullCache)
