@@ -33,6 +33,8 @@ from planning.search import compiled_rrt
 from planning.search.rrt import rrt_connect
 from planning.search.shortcut import shortcut
 
+_CHECK_S = 2e-6  # s, a generous time per configuration of the compiled search (measured 1.5 us)
+
 
 class JointPathSearch:
     """Finds validated joint paths in a scene with a planner's options.
@@ -91,9 +93,7 @@ class JointPathSearch:
         opts = self._options
         if time.perf_counter() > deadline:
             raise self._failure(deadline, "no time was left to search")
-        # The compiled search is not timed: it stops after spheres.drake_fallback_after checks
-        # (0.1 to 0.2 s on this project's VM), then the deadline applies again.
-        compiled = self._compiled(q_start, q_goal)
+        compiled = self._compiled(q_start, q_goal, deadline)
         if compiled is not None and compiled[0] is not None:
             return compiled[0], compiled[1]
         adapter = self.adapter(search=True)
@@ -128,7 +128,7 @@ class JointPathSearch:
             path, how = self._refined(path, how)
         return path, how
 
-    def _compiled(self, q_start, q_goal):
+    def _compiled(self, q_start, q_goal, deadline: float):
         """The compiled search and its fine check (``planning.search.compiled_rrt``), with up
         to ``validation.max_repairs`` compiled repairs of a segment that fails it.
 
@@ -144,6 +144,11 @@ class JointPathSearch:
         data = model.kernel_data()
         lower, upper = model.joint_limits()
         rng = compiled_rrt.seed_state(opts.seed)
+        # Compiled code cannot read the clock: the time left becomes a count of checks (at a
+        # generous _CHECK_S each), which only binds when the timeout is short; otherwise a seed
+        # gives the same path on any machine.
+        left = max(0.0, deadline - time.perf_counter())
+        budget = max(1, min(opts.spheres.drake_fallback_after, int(left / _CHECK_S)))
 
         def search(q_a, q_b, edge_step, step, anchor_radius):
             return compiled_rrt.plan(
@@ -155,7 +160,7 @@ class JointPathSearch:
                 edge_step,
                 step,
                 opts.rrt.goal_bias,
-                opts.spheres.drake_fallback_after,
+                budget,
                 opts.shortcut.iterations,
                 rng,
                 anchor_radius,

@@ -118,3 +118,25 @@ def test_the_spheres_prove_free_what_drake_finds_free(scene, dut, ends):
     options = MotionPlannerOptions()
     options.spheres.enabled = False
     assert not mut.JointPathSearch(scene, options).proves_free(ends[0])  # no model: no proof
+
+
+def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
+    """The compiled search cannot read the clock: the time left becomes its check budget (at
+    2 us a check), so a request with 5 ms left may check about 2 500 configurations, not the
+    50 000 of drake_fallback_after; with the default timeout that bound is the one that binds."""
+    budgets = []
+    real = mut.compiled_rrt.plan
+
+    def recorded(*args):
+        budgets.append(args[8])  # max_checks
+        return real(*args)
+
+    monkeypatch.setattr(mut.compiled_rrt, "plan", recorded)
+    dut = mut.JointPathSearch(scene, MotionPlannerOptions())
+    try:
+        dut.find(*ends, time.perf_counter() + 0.005)
+    except PlanningError as e:
+        assert e.code is ErrorCode.TIMED_OUT
+    assert 0 < budgets[0] <= 2_500
+    dut.find(*ends, deadline())
+    assert budgets[-1] == MotionPlannerOptions().spheres.drake_fallback_after
