@@ -4,7 +4,9 @@ import importlib.util
 import uuid
 
 import numba.core.config
+import numpy as np
 import pytest
+from numba import njit
 
 import planning.collision.sphere_kernel as mut
 
@@ -101,7 +103,6 @@ def test_the_kernel_is_cached_once_loaded():
 # configuration inside an obstacle is COLLIDING, one far from everything FREE, and a non-finite
 # configuration is never FREE.
 # ---------------------------------------------------------------------------------------------
-import numpy as np  # noqa: E402
 from pydrake.math import RigidTransform  # noqa: E402
 
 from planning import PlanningScene  # noqa: E402
@@ -238,8 +239,6 @@ def cluttered():
 
 
 def test_points_move_no_faster_than_the_speed_table_says(cluttered):
-    import numpy as np
-
     scene, model, d = cluttered
     lower, upper = model.joint_limits()
     rng = np.random.default_rng(0)
@@ -253,48 +252,55 @@ def test_points_move_no_faster_than_the_speed_table_says(cluttered):
             assert np.all(speed <= bound * (1 + 1e-6) + 1e-9)
 
 
-def test_a_free_configuration_stays_free_within_its_radius(cluttered):
-    import numpy as np
+@njit
+def _radius(q, q_to, d):
+    """(verdict, radius) of q for motion towards q_to, with fresh scratch arrays. (The scratch
+    tuple itself does not box back into Python from a cached kernel, hence the wrapper.)"""
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    mut.edge_speeds(q, q_to, d, lam)
+    return mut._classify_one(q, d, False, mut._work(d), lam)
 
+
+@njit
+def _first_blocking(q_a, q_b, step, d):
+    """``edge_prefix`` of one segment, no anchors: (first, n, configurations classified)."""
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    counter = np.zeros(1, dtype=np.int64)
+    first, n = mut.edge_prefix(
+        q_a, q_b, step, d, mut._work(d), lam, np.empty(len(q_a)), counter, np.empty((0, 7)), 0.0
+    )
+    return first, n, counter[0]
+
+
+def test_a_free_configuration_stays_free_within_its_radius(cluttered):
     scene, model, d = cluttered
     lower, upper = model.joint_limits()
     rng = np.random.default_rng(1)
-    work = mut._work(d)
-    lam = np.zeros(len(d.body_step) + len(d.body_pair))
     radii = []
     for q in rng.uniform(lower, upper, (400, 7)):
         u = rng.normal(size=7)
         u /= np.linalg.norm(u)
-        mut.edge_speeds(q, q + u, d, lam)
-        state, radius = mut._classify_one(q, d, False, work, lam)
+        state, radius = _radius(q, q + u, d)
         if state != mut.FREE:
             assert radius == 0.0
             continue
         radii.append(radius)
         for f in (-1.0, -0.5, 0.5, 0.999):
-            assert mut._classify_one(q + f * radius * u, d, False, work, lam)[0] == mut.FREE
+            assert _radius(q + f * radius * u, q + u, d)[0] == mut.FREE
     assert len(radii) > 100 and np.median(radii) > 0.002  # certificates that skip samples
 
 
 def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
     """The certified march finds the same first blocking sample as checking all of them."""
-    import numpy as np
-
     scene, model, d = cluttered
     lower, upper = model.joint_limits()
     rng = np.random.default_rng(2)
-    work = mut._work(d)
-    lam = np.zeros(len(d.body_step) + len(d.body_pair))
-    counter = np.zeros(1, dtype=np.int64)
     fewer = 0
     for _ in range(60):
         q_a, q_b = rng.uniform(lower, upper, (2, 7))
         q_b = q_a + 0.5 * (q_b - q_a)
-        first, n = mut.edge_prefix(
-            q_a, q_b, 0.01, d, work, lam, np.empty(7), counter, np.empty((0, 7)), 0.0
-        )
+        first, n, checks = _first_blocking(q_a, q_b, 0.01, d)
         every, n_every, _, _ = mut.prefixes(q_a[None], q_b[None], 0.01, True, d)
         assert (first, n) == (every[0], n_every[0])
-        fewer += counter[0] < min(first + 1, n)
-        counter[0] = 0
+        fewer += checks < min(first + 1, n)
     assert fewer > 10
