@@ -131,6 +131,8 @@ def _free(q_a, q_b, step, d, scratch):
     length = 0.0
     for j in range(len(q_a)):
         length += (q_b[j] - q_a[j]) ** 2
+    if not np.isfinite(length):
+        return False
     n = max(1, int(np.ceil(np.sqrt(length) / step)))
     stride = 1
     while stride < n:

@@ -175,3 +175,13 @@ def test_a_changed_kernel_source_empties_the_cache(tmp_path, monkeypatch):
     monkeypatch.setattr(mut.Path, "write_text", read_only)  # the functions are not cached at all
     mut._refresh_cache(module, cache)
     assert isinstance(dispatcher._cache, mut.NullCache)
+
+
+def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
+    q_a = ends[0]
+    bad = q_a.copy()
+    bad[2] = np.nan
+    none = np.empty((0, 7))
+    assert _edge_free(q_a, q_a - 0.3 * np.eye(7)[0], 0.1, data, none, 0.0)  # (a free one is)
+    assert not _edge_free(q_a, bad, 0.1, data, none, 0.0)
+    assert not _edge_free(bad, q_a, 0.1, data, none, 0.0)
