@@ -71,6 +71,8 @@ def _uniform(state):
 
 @njit(cache=True)
 def _nearest(nodes, size, q):
+    """(index, distance) of the node among the first ``size`` rows nearest to q (a linear
+    scan)."""
     best = 0
     best_d2 = np.inf
     for i in range(size):
@@ -257,6 +259,7 @@ def _greedy(path, edge_step, d, scratch):
 
 @njit(cache=True)
 def _arc(path):
+    """The cumulative joint-space length at each waypoint, (N,), rad."""
     cum = np.zeros(len(path))
     for i in range(1, len(path)):
         total = 0.0
@@ -279,6 +282,8 @@ def _at(path, cum, s):
 
 @njit(cache=True)
 def _shortcut(path, iterations, edge_step, d, rng, scratch):
+    """Greedy vertex skipping, ``iterations`` random shortcuts between two points drawn by arc
+    length (kept when free and shorter), then greedy skipping again."""
     path = _greedy(path, edge_step, d, scratch)
     for _ in range(iterations):
         if len(path) < 3:
@@ -311,6 +316,7 @@ def _shortcut(path, iterations, edge_step, d, rng, scratch):
 
 @njit(cache=True)
 def _drop_duplicates(path):
+    """The path without waypoints equal to the one before."""
     keep = np.ones(len(path), dtype=np.bool_)
     for i in range(1, len(path)):
         same = True
