@@ -171,16 +171,6 @@ def _distance2(x, y, z, obj):
 
 
 @njit(cache=True)
-def _box_gap2(x, y, z, obj):
-    """Squared distance from the point (x, y, z) to the axis-aligned box around the object of
-    row ``obj``, m^2 (0 inside). Branch-free: measured twice as fast as with a loop."""
-    u = max(obj[16] - x, x - obj[19], 0.0)
-    v = max(obj[17] - y, y - obj[20], 0.0)
-    w = max(obj[18] - z, z - obj[21], 0.0)
-    return u * u + v * v + w * w
-
-
-@njit(cache=True)
 def _gap2(a, i, b, j):
     """Squared distance between the points a[i] and b[j], m^2."""
     u = a[i, 0] - b[j, 0]
@@ -420,7 +410,8 @@ def edge_speeds(q_a, q_b, d, lam):
     for j in range(len(q_a)):
         length += (q_b[j] - q_a[j]) ** 2
     length = np.sqrt(length)
-    for b in range(len(lam)):
+    bodies = len(d.body_step)
+    for b in range(bodies):
         total = 0.0
         if length > 0.0:
             for j in range(len(q_a)):
@@ -428,7 +419,6 @@ def edge_speeds(q_a, q_b, d, lam):
                 if u > 0.0:
                     total += d.speed[b, j] * u
         lam[b] = total
-    bodies = len(d.body_step)
     for p in range(len(d.body_pair)):
         a = d.body_pair[p, 0]
         b = d.body_pair[p, 1]
