@@ -248,7 +248,7 @@ class MotionPlanner:
         """Returns ``q`` as 7 arm joints, or raises ``invalid`` (not finite, wrong size, out of
         limits) or ``colliding`` (naming the bodies in collision)."""
         q = self._as_arm(q, invalid, what)
-        # The spheres' proof is Drake's answer too (they cover the geometry), and 50x faster.
+        # The spheres cover the geometry: what they prove free, Drake finds free too.
         if not (self._search.proves_free(q) or self._scene.is_collision_free(q)):
             raise PlanningError(
                 colliding, f"the {what} collides: {self._scene.describe_collisions(q)}"
