@@ -1,6 +1,6 @@
 """Time-optimal path parameterisation by reachability analysis (TOPP-RA) under per-joint velocity
 and acceleration limits, compiled (numba): the same problem as Drake's ``Toppra`` with those two
-constraints, 50 to 100 times faster (Drake solves a linear programme per grid point through
+constraints, about 35 times faster (Drake solves a linear programme per grid point through
 ``MathematicalProgram``; with two unknowns per stage each is solved here exactly).
 
 The path q(s) is known at grid points s_0 < ... < s_N through q'(s_i) and q''(s_i). The unknowns
