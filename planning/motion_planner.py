@@ -60,10 +60,8 @@ class MotionPlanner:
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA
         if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.spheres.slack)
-        adapter = CheckerAdapter(scene)
-        self._limits = (adapter.lower, adapter.upper)  # the arm's joint limits, rad
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
-        self._search.prepare()  # the compiled search is compiled or loaded here, once
+        self._search.warm_up()  # the compiled search is compiled or loaded here, once
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
@@ -260,7 +258,7 @@ class MotionPlanner:
         if q.size not in (7, 9) or not np.all(np.isfinite(q)):
             raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {q.tolist()}")
         q = q[:7] if q.size == 9 else q
-        lower, upper = self._limits  # the plant's: fixed once the plant is finalized
+        lower, upper = self._search.limits
         if np.any(q < lower - 1e-6) or np.any(q > upper + 1e-6):
             raise PlanningError(code, f"the {what} {np.round(q, 4).tolist()} is out of limits")
         return np.clip(q, lower, upper)

@@ -292,20 +292,6 @@ class SphereCollisionModel:
         _kernel.announce_compile()
         return self._data
 
-    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
-        """The arm's lower and upper joint limits, (7,) each, rad."""
-        plant = self._scene.plant
-        return (
-            plant.GetPositionLowerLimits()[self._arm].copy(),
-            plant.GetPositionUpperLimits()[self._arm].copy(),
-        )
-
-    def drake_free(self, qs) -> np.ndarray:
-        """Drake's checker on each row of qs (N, 7): True where collision-free."""
-        scene = self._scene
-        check = scene.checker.CheckConfigCollisionFree
-        return np.array([check(scene.full_q(q)) for q in np.atleast_2d(qs)], dtype=bool)
-
     @property
     def sphere_bodies(self) -> np.ndarray:
         """The body (row of ``KernelData.speed``) of each sphere, (S,)."""

@@ -51,6 +51,8 @@ class JointPathSearch:
         self._scene = scene
         self._options = options
         self.gcs = None
+        adapter = CheckerAdapter(scene)
+        self.limits = (adapter.lower, adapter.upper)  # the arm's joint limits, rad (fixed)
 
     def adapter(self, resolution: float | None = None, *, search: bool = False):
         """Collision queries: sphere models first when enabled
@@ -77,11 +79,15 @@ class JointPathSearch:
         return model if model.active else None
 
     def prepare(self) -> None:
-        """Syncs the sphere model with the scene and has the compiled search ready (see
-        ``MotionPlanner.prepare``)."""
+        """Syncs the sphere model with the scene (see ``MotionPlanner.prepare``)."""
+        self._sphere_model()
+
+    def warm_up(self) -> None:
+        """Has the compiled search ready (compiled, or loaded from numba's cache): once, when
+        the planner is made."""
         model = self._sphere_model()
         if model is not None:
-            compiled_rrt.warm_up(model.kernel_data(), *model.joint_limits())
+            compiled_rrt.warm_up(model.kernel_data(), *self.limits)
 
     def proves_free(self, q) -> bool:
         """True when the sphere model proves the arm configuration q (7,) collision-free (then
@@ -142,7 +148,7 @@ class JointPathSearch:
         if model is None or self.gcs is not None or opts.kto.enabled:
             return None
         data = model.kernel_data()
-        lower, upper = model.joint_limits()
+        lower, upper = self.limits
         rng = compiled_rrt.seed_state(opts.seed)
         # Compiled code cannot read the clock: the time left becomes a count of checks (at a
         # generous _CHECK_S each), which only binds when the timeout is short; otherwise a seed
@@ -174,7 +180,7 @@ class JointPathSearch:
         if status != compiled_rrt.FOUND:
             return None, "rrt_connect", None
         for repair in range(opts.validation.max_repairs + 1):
-            bad = self._first_failing_segment(model, path, fine, data)
+            bad = self._first_failing_segment(path, fine, data)
             if bad < 0:
                 return path, name, None
             if repair == opts.validation.max_repairs:
@@ -189,16 +195,15 @@ class JointPathSearch:
             name = "rrt_connect+repaired"
         return None, name, path
 
-    @staticmethod
-    def _first_failing_segment(model, path, resolution: float, data) -> int:
+    def _first_failing_segment(self, path, resolution: float, data) -> int:
         """The first segment of the path with a sample at ``resolution`` that the spheres
         prove colliding or that Drake finds colliding among those they cannot decide; -1 when
         none."""
         bad, unknown, segment, _ = compiled_rrt.fine_check(path, resolution, data)
+        if bad >= 0:  # only samples before the colliding segment matter
+            unknown, segment = unknown[segment < bad], segment[segment < bad]
         if len(unknown):
-            if bad >= 0:  # only samples before the colliding segment matter
-                unknown, segment = unknown[segment < bad], segment[segment < bad]
-            blocked = segment[~model.drake_free(unknown)]
+            blocked = segment[~self.adapter(resolution).configs_free(unknown)]
             if len(blocked):
                 return int(blocked.min())
         return int(bad)

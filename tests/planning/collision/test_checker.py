@@ -9,22 +9,15 @@ import pytest
 from pydrake.math import RigidTransform
 
 import planning.collision.checker as mut
-from planning import PlanningScene
 from planning.paths import densify
 
 E = np.eye(7)
 
 
 @pytest.fixture(scope="module")
-def scene():
-    """The table and a wall around the hand at "ready"; turning joint 1 by 0.8 rad either way
-    clears it."""
-    scene = PlanningScene()
-    ready = scene.model.named_configurations["ready"]
-    scene.add_box(
-        "wall", [0.1, 0.1, 0.3], RigidTransform(scene.attachment_pose(ready).translation())
-    )
-    return scene
+def scene(wall_scene):
+    """The wall scene (``tests/planning/conftest.py``)."""
+    return wall_scene
 
 
 @pytest.fixture(scope="module")

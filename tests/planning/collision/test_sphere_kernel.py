@@ -240,7 +240,8 @@ def cluttered():
 
 def test_points_move_no_faster_than_the_speed_table_says(cluttered):
     scene, model, d = cluttered
-    lower, upper = model.joint_limits()
+    adapter = CheckerAdapter(scene)
+    lower, upper = adapter.lower, adapter.upper
     rng = np.random.default_rng(0)
     h = 1e-6
     for q in rng.uniform(lower, upper, (200, 7)):
@@ -274,7 +275,8 @@ def _first_blocking(q_a, q_b, step, d):
 
 def test_a_free_configuration_stays_free_within_its_radius(cluttered):
     scene, model, d = cluttered
-    lower, upper = model.joint_limits()
+    adapter = CheckerAdapter(scene)
+    lower, upper = adapter.lower, adapter.upper
     rng = np.random.default_rng(1)
     radii = []
     for q in rng.uniform(lower, upper, (400, 7)):
@@ -293,7 +295,8 @@ def test_a_free_configuration_stays_free_within_its_radius(cluttered):
 def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
     """The certified march finds the same first blocking sample as checking all of them."""
     scene, model, d = cluttered
-    lower, upper = model.joint_limits()
+    adapter = CheckerAdapter(scene)
+    lower, upper = adapter.lower, adapter.upper
     rng = np.random.default_rng(2)
     fewer = 0
     for _ in range(60):

@@ -3,22 +3,14 @@ two ends 1.6 rad apart on the first joint."""
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
-
-from planning import PlanningScene
 
 E = np.eye(7)
 
 
 @pytest.fixture(scope="module")
-def scene():
-    """The table and a wall around the hand at "ready", between the start and the goal."""
-    scene = PlanningScene()
-    ready = scene.model.named_configurations["ready"]
-    scene.add_box(
-        "wall", [0.1, 0.1, 0.3], RigidTransform(scene.attachment_pose(ready).translation())
-    )
-    return scene
+def scene(wall_scene):
+    """The wall scene (``tests/planning/conftest.py``), between the start and the goal."""
+    return wall_scene
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,8 @@ def data(scene):
 
 @pytest.fixture(scope="module")
 def limits(scene):
-    return sphere_model(scene).joint_limits()
+    adapter = CheckerAdapter(scene)
+    return adapter.lower, adapter.upper
 
 
 def search(data, limits, q_a, q_b, seed=0, max_checks=50_000, iterations=20, anchor_radius=0.0):
