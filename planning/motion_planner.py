@@ -62,6 +62,7 @@ class MotionPlanner:
             sphere_model(scene, self._options.spheres.slack)
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
         self._search.warm_up()  # the compiled search is compiled or loaded here, once
+        self._state.ik_solver()  # made now rather than in the first pose request
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
@@ -206,7 +207,7 @@ class MotionPlanner:
         opts = self._options
         result = cartesian_path(
             scene,
-            CheckerAdapter(scene),
+            self._search.adapter(opts.validation.resolution),
             plant.GetFrameByName(name, scene.model.instance),
             q_start,
             X_WG,

@@ -160,15 +160,21 @@ class RobotState:
         elif p_WE is None and R_WE is None:
             X_WE = self.fk(frame=frame)
             p_WE, R_WE = X_WE.translation(), X_WE.rotation()
-        if self._ik is None:
-            self._ik = IkSolver(self._scene)
-        return self._ik.solve(
+        return self.ik_solver().solve(
             frame or self._ee_frame,
             p_WE=p_WE,
             R_WE=R_WE,
             q_seed=self._q if q_seed is None else q_seed,
             options=options or self._ik_options,
         )
+
+    def ik_solver(self) -> IkSolver:
+        """This state's IK solver, made on the first call (it allocates a collision-checker
+        context, a few milliseconds: ``MotionPlanner`` calls this when it is made, so that no
+        request pays for it)."""
+        if self._ik is None:
+            self._ik = IkSolver(self._scene)
+        return self._ik
 
     def make_reader(self, input_size: int = NUM_STATES) -> RobotStateReader:
         """Returns a new ``RobotStateReader`` to add to a diagram; ``read`` uses it after."""

@@ -35,7 +35,7 @@ from planning.collision import sphere_kernel as _kernel
 from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
-from planning.collision.sphere_robot import cover_shape, robot_spheres
+from planning.collision.sphere_robot import held_cover, robot_spheres
 from planning.model.layout import NUM_ARM_JOINTS
 from planning.model.panda import ATTACHMENT_BODY
 
@@ -72,6 +72,7 @@ class SphereCollisionModel:
         self._padding = checker.GetPaddingMatrix()
         self._attachment = int(plant.GetBodyByName(ATTACHMENT_BODY, scene.model.instance).index())
         self._held_cache: dict[tuple, SphereSet] = {}
+        self._groups_cache: dict[int, tuple] = {}  # body -> _body_groups
         self._signature = self._held_signature = self._version = None
         self.supported = True
         try:
@@ -143,9 +144,10 @@ class SphereCollisionModel:
             sets[self._attachment] = SphereSet.concat(held_sets)
         slot = {b: k for k, b in enumerate(self._bodies)}
         present = list(sets)
-        owner = np.concatenate([np.full(len(sets[b].radius), b) for b in present])
-        self._slot = np.array([slot[b] for b in owner], dtype=int)
-        self._sphere_body = np.array([present.index(b) for b in owner], dtype=int)
+        counts = [len(sets[b].radius) for b in present]
+        owner = np.repeat(present, counts)
+        self._slot = np.repeat([slot[b] for b in present], counts).astype(int)
+        self._sphere_body = np.repeat(np.arange(len(present)), counts).astype(int)
         p_BS = np.vstack([sets[b].p_BS for b in present])
         radius = np.concatenate([sets[b].radius for b in present])
         inner = np.concatenate([sets[b].inner for b in present])
@@ -153,11 +155,17 @@ class SphereCollisionModel:
         # Groups of up to _GROUP neighbouring spheres of one body, each with a bounding sphere,
         # and a bounding sphere of each body's groups: configurations are culled per body, then
         # per group, before spheres are looked at.
-        groups = [(b, m) for b in present for m in _groups(np.flatnonzero(owner == b), p_BS)]
-        bounds = [_bound(p_BS[m], radius[m]) for _, m in groups]
+        groups, bounds, group_body = [], [], []
+        offset = 0
+        for k, b in enumerate(present):
+            local, local_bounds = self._body_groups(b, sets[b])
+            groups += [(b, m + offset) for m in local]
+            bounds += local_bounds
+            group_body += [k] * len(local)
+            offset += len(sets[b].radius)
         group_centre = np.array([c for c, _ in bounds]).reshape(-1, 3)
         group_radius = np.array([r for _, r in bounds])
-        group_body = np.array([present.index(b) for b, _ in groups], dtype=np.int64)
+        group_body = np.array(group_body, dtype=np.int64)
         body_bounds = [
             _bound(group_centre[group_body == k], group_radius[group_body == k])
             for k in range(len(present))
@@ -203,22 +211,19 @@ class SphereCollisionModel:
         )
         # Self-collision: group pairs of the body pairs the checker checks, sphere pairs padded
         # to _GROUP**2 per group pair, in runs per body pair.
-        checked_bodies = self._checked_body_pairs(present)
-        checked = sorted(
-            (
-                (present.index(a), present.index(b), g, h)
-                for g, (a, _) in enumerate(groups)
-                for h, (b, _) in enumerate(groups)
-                if (a, b) in checked_bodies
-            ),
-        )
-        body_pairs = list(dict.fromkeys((i, j) for i, j, _, _ in checked))
-        run = np.searchsorted(
-            [i * len(present) + j for i, j, _, _ in checked],
-            [i * len(present) + j for i, j in body_pairs] + [np.inf],
-        )
+        checked_bodies = np.zeros((len(present), len(present)), dtype=bool)
+        for a, b in self._checked_body_pairs(present):
+            checked_bodies[present.index(a), present.index(b)] = True
+        # Group pairs (g, h) of checked body pairs, sorted by (body of g, body of h, g, h).
+        g, h = np.nonzero(checked_bodies[group_body[:, None], group_body[None, :]])
+        key = group_body[g] * len(present) + group_body[h]
+        order = np.lexsort((h, g, key))
+        g, h, key = g[order].astype(np.int64), h[order].astype(np.int64), key[order]
+        first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if len(key) else key
+        body_pairs = [(int(group_body[g[k]]), int(group_body[h[k]])) for k in first]
+        run = np.r_[first, len(key)]
+        checked = list(zip(g.tolist(), h.tolist(), strict=True))
         # Every (sphere of g, sphere of h) of each checked group pair, _GROUP**2 per row.
-        g, h = (np.array([c[k] for c in checked], dtype=np.int64) for k in (2, 3))
         shape = (len(checked), _GROUP * _GROUP)
         pair_a = np.broadcast_to(members[g][:, :, None], (len(g), _GROUP, _GROUP)).reshape(shape)
         pair_b = np.broadcast_to(members[h][:, None, :], (len(h), _GROUP, _GROUP)).reshape(shape)
@@ -241,7 +246,7 @@ class SphereCollisionModel:
             )
             ** 2,
             body_pair_start=np.asarray(run, dtype=np.int64),
-            pair_group=np.array([(g, h) for _, _, g, h in checked], dtype=np.int64).reshape(-1, 2),
+            pair_group=np.array(checked, dtype=np.int64).reshape(-1, 2),
             pair_reach2=reach**2,
             pair_a=pair_a,
             pair_b=pair_b,
@@ -249,6 +254,16 @@ class SphereCollisionModel:
             pair_in=pair_in,
         )
         self._robot_arrays = {k: np.ascontiguousarray(v) for k, v in arrays.items()}
+
+    def _body_groups(self, body: int, spheres: SphereSet):
+        """(groups of the body's spheres as index arrays into ``spheres``, a bounding sphere
+        of each (``_bound``)): kept for the robot's own bodies, whose spheres never change."""
+        if body in self._groups_cache and body != self._attachment:
+            return self._groups_cache[body]
+        local = _groups(np.arange(len(spheres.radius)), spheres.p_BS)
+        out = (local, [_bound(spheres.p_BS[m], spheres.radius[m]) for m in local])
+        self._groups_cache[body] = out
+        return out
 
     def _checked_body_pairs(self, present: list[int]) -> set[tuple[int, int]]:
         """Body pairs (a before b in ``present``) that Drake's checker checks: filtered
@@ -273,10 +288,7 @@ class SphereCollisionModel:
     def _held(self, obj) -> SphereSet:
         key = (obj.shape, obj.size)
         if key not in self._held_cache:
-            from pydrake.math import RigidTransform
-
-            shape = obj.drake_shape()
-            self._held_cache[key] = cover_shape(shape, RigidTransform(), self._slack, scaled=True)
+            self._held_cache[key] = held_cover(obj.drake_shape(), self._slack)
         cover = self._held_cache[key]
         return cover.transformed(obj.X_PO.rotation().matrix(), obj.X_PO.translation())
 

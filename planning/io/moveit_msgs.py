@@ -156,9 +156,27 @@ class ObjectColor:
 
 
 @dc.dataclass
+class Octomap:
+    """octomap_msgs/Octomap (read only to refuse a non-empty one)."""
+
+    header: Header | None = None
+    binary: bool = False
+    id: str = ""
+    resolution: float = 0.0
+    data: list = _list()
+
+
+@dc.dataclass
+class OctomapWithPose:
+    header: Header | None = None
+    origin: Pose | None = None
+    octomap: Octomap | None = None
+
+
+@dc.dataclass
 class PlanningSceneWorld:
     collision_objects: list[CollisionObject] = _list()
-    octomap: Any = None
+    octomap: OctomapWithPose | None = None
 
 
 @dc.dataclass

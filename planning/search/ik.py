@@ -7,7 +7,12 @@ fixed at the scene's positions, a ``MinimumDistanceLowerBoundConstraint`` built 
 collision checker (so it sees added and held objects and the scene's collision filters), and a
 small quadratic cost pulling q towards the attempt's start. The first attempt starts at the seed;
 restarts start at joint vectors drawn uniformly within the limits from
-``np.random.default_rng(options.seed)``, so results are deterministic for a given seed. A
+``np.random.default_rng(options.seed)``, so results are deterministic for a given seed. The
+attempt first takes damped Newton steps from its start, pulled towards the start in the
+Jacobian's null space (``planning.search.cartesian.PoseNewton``): the joints nearest the start
+that reach the target, as the program's cost asks. When they satisfy every constraint of the
+program, they are the attempt's answer (about 1 ms, against 3 ms for the program); otherwise the
+program starts from them. A
 solution is accepted only when forward kinematics confirms the tolerances and the collision
 checker finds it collision-free.
 """
@@ -28,10 +33,12 @@ from pydrake.solvers import Solve
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
 from planning.model.layout import NUM_ARM_JOINTS
+from planning.search.cartesian import PoseNewton
 
 _REACH_MARGIN = 0.02  # m added to the computed reach bound
 _POSITION_COST = 1e3  # 1/m^2, weight of the squared position error (joint cost: 1e-2/rad^2)
 _ORIENTATION_COST = 10.0  # weight of (1 - cos(angle error))
+_NEWTON_STEPS = 50  # damped Newton steps that find the program's initial guess
 
 
 @dataclass
@@ -113,6 +120,15 @@ class IkSolver:
         )
 
         ik, q_vars = self._make_program(frame, p_WE, R_WE, options)
+        newton = PoseNewton(
+            plant,
+            self._context,
+            frame,
+            scene.full_q,
+            scene.model.arm_indices,
+            self._lower,
+            self._upper,
+        )
         rng = np.random.default_rng(options.seed)
         why = "no attempt converged"
         attempts = 0
@@ -121,13 +137,19 @@ class IkSolver:
                 break
             attempts += 1
             q0 = q_seed if attempt == 0 else rng.uniform(self._lower, self._upper)
-            q_full = scene.full_q(q0)
-            ik.prog().SetInitialGuess(q_vars, q_full)
-            self._set_nominal(ik, q_full)
-            result = Solve(ik.prog())
-            if not result.is_success():
-                continue
-            q = scene.arm_q(result.GetSolution(q_vars))
+            # Damped Newton steps first, pulled towards q0 in the null space: the joints nearest
+            # q0 that reach the target, which is what the program's cost asks for too. When
+            # they meet every constraint of the program, they are the answer (about 1 ms);
+            # otherwise the program starts from them (or from q0).
+            R = None if R_WE is None else R_WE.matrix()
+            q = newton.solve(q0, R, p_WE, _NEWTON_STEPS, rest=q0)
+            if q is None or not self._program_accepts(ik, q):
+                ik.prog().SetInitialGuess(q_vars, scene.full_q(q0 if q is None else q))
+                self._set_nominal(ik, scene.full_q(q0))
+                result = Solve(ik.prog())
+                if not result.is_success():
+                    continue
+                q = scene.arm_q(result.GetSolution(q_vars))
             X_WE = self._fk(frame, q)
             if not self._within_tolerance(X_WE, p_WE, R_WE, options):
                 continue
@@ -175,6 +197,11 @@ class IkSolver:
             1e-2 * np.eye(len(q_vars)), np.zeros(len(q_vars)), q_vars
         )
         return ik, q_vars
+
+    def _program_accepts(self, ik, q) -> bool:
+        """True when the arm joints q (7,) satisfy every constraint of the program (joint
+        limits, fingers, pose, minimum distance)."""
+        return bool(ik.prog().CheckSatisfied(ik.prog().GetAllConstraints(), self._scene.full_q(q)))
 
     def _set_nominal(self, ik, q_full) -> None:
         cost = self._cost.evaluator()

@@ -131,19 +131,16 @@ def solve(grid, dq, ddq, vmax, amax):
     return x
 
 
-def parameterize(path, grid: np.ndarray, max_velocity, max_acceleration):
-    """The time-optimal s(t) along ``path`` (a Drake ``PiecewisePolynomial`` q(s)) under the
-    limits at the ``grid`` points, rest to rest, as a ``PiecewisePolynomial`` (piecewise
-    quadratic, written as cubic Hermite pieces: exact); None when there is none."""
-    from pydrake.trajectories import PiecewisePolynomial
-
+def time_knots(grid, dq, ddq, max_velocity, max_acceleration):
+    """The time-optimal s(t) through the ``grid`` points (N + 1,) of a path whose derivatives
+    there are ``dq``, ``ddq`` (N + 1, J), rest to rest: (times, rates), the time at which s
+    reaches each grid point and s_dot there (s(t) is quadratic between them: the cubic Hermite
+    pieces through (times, grid, rates) are exact); None when there is none."""
     grid = np.asarray(grid, dtype=float)
-    dq = np.ascontiguousarray(path.MakeDerivative(1).vector_values(grid).T)
-    ddq = np.ascontiguousarray(path.MakeDerivative(2).vector_values(grid).T)
     x = solve(
         grid,
-        dq,
-        ddq,
+        np.ascontiguousarray(dq, dtype=float),
+        np.ascontiguousarray(ddq, dtype=float),
         np.asarray(max_velocity, dtype=float),
         np.asarray(max_acceleration, dtype=float),
     )
@@ -154,6 +151,22 @@ def parameterize(path, grid: np.ndarray, max_velocity, max_acceleration):
     if np.any(mean <= 0.0):
         return None  # a stop inside the path: no finite time across it
     times = np.concatenate([[0.0], np.cumsum(2.0 * np.diff(grid) / mean)])
+    return times, rate
+
+
+def parameterize(path, grid: np.ndarray, max_velocity, max_acceleration):
+    """The time-optimal s(t) along ``path`` (a Drake ``PiecewisePolynomial`` q(s)) under the
+    limits at the ``grid`` points, rest to rest, as a ``PiecewisePolynomial`` (piecewise
+    quadratic, written as cubic Hermite pieces: exact); None when there is none."""
+    from pydrake.trajectories import PiecewisePolynomial
+
+    grid = np.asarray(grid, dtype=float)
+    dq = path.MakeDerivative(1).vector_values(grid).T
+    ddq = path.MakeDerivative(2).vector_values(grid).T
+    knots = time_knots(grid, dq, ddq, max_velocity, max_acceleration)
+    if knots is None:
+        return None
+    times, rate = knots
     return PiecewisePolynomial.CubicHermite(times, grid.reshape(1, -1), rate.reshape(1, -1))
 
 

@@ -130,3 +130,24 @@ def test_robot_spheres_cover_every_collision_geometry_and_are_cached(scene, tmp_
     looser = mut.robot_spheres(plant, inspector, bodies[2:], 0.03)
     assert len(looser[bodies[2]].radius) <= len(dut[bodies[2]].radius)
     assert len(list((tmp_path / "spheres").glob("*.npz"))) == 3
+
+
+def test_held_covers_are_the_scaled_covers_and_are_cached(tmp_path, monkeypatch):
+    monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path))
+    box = Box(0.04, 0.05, 0.12)
+    dut = mut.held_cover(box, 0.015)
+    expected = mut.cover_shape(box, RigidTransform(), 0.015, scaled=True)
+    for a, b in ((dut.p_BS, expected.p_BS), (dut.radius, expected.radius)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(dut.inner, expected.inner)
+    assert len(list((tmp_path / "spheres").glob("held-*.npz"))) == 1
+    monkeypatch.setattr(mut, "cover_shape", lambda *args, **kwargs: pytest.fail("covered again"))
+    again = mut.held_cover(Box(0.04, 0.05, 0.12), 0.015)
+    np.testing.assert_array_equal(again.radius, dut.radius)
+    monkeypatch.undo()
+    monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path))
+    # Another size, shape or slack: another entry; a sphere needs no cover file.
+    mut.held_cover(Box(0.04, 0.05, 0.13), 0.015)
+    mut.held_cover(Cylinder(0.03, 0.1), 0.015)
+    mut.held_cover(Box(0.04, 0.05, 0.12), 0.03)
+    assert len(list((tmp_path / "spheres").glob("held-*.npz"))) == 4

@@ -130,3 +130,86 @@ def test_stops_at_a_joint_jump_and_beyond_reach(scene, frame, ready):
     assert 0.0 < far.fraction < 1.0 and "no IK solution" in far.reason
     adapter = CheckerAdapter(scene)
     assert np.all((far.waypoints >= adapter.lower) & (far.waypoints <= adapter.upper))
+
+
+def random_rotation(rng):
+    q = rng.normal(size=4)
+    from pydrake.common.eigen_geometry import Quaternion
+
+    return RotationMatrix(Quaternion(q / np.linalg.norm(q)))
+
+
+def test_the_line_slerps_as_drake_does_the_shorter_way():
+    from pydrake.common.eigen_geometry import Quaternion
+
+    rng = np.random.default_rng(0)
+    for _ in range(20):  # pairs more than a quarter turn apart among them (dot < 0)
+        R_a, R_b = random_rotation(rng), random_rotation(rng)
+        X_a, X_b = RigidTransform(R_a, rng.normal(size=3)), RigidTransform(R_b, rng.normal(size=3))
+        s = rng.uniform(size=5)
+        R, p = mut._line(X_a, X_b, s)
+        for k in range(len(s)):
+            quat = R_a.ToQuaternion().slerp(s[k], R_b.ToQuaternion())
+            expected = RotationMatrix(Quaternion(quat.wxyz() / np.linalg.norm(quat.wxyz())))
+            np.testing.assert_allclose(R[k], expected.matrix(), atol=1e-12)
+            np.testing.assert_allclose(
+                p[k], (1 - s[k]) * X_a.translation() + s[k] * X_b.translation()
+            )
+
+
+@pytest.mark.parametrize("turn", [0.0, 1e-10, 0.3, 2.0, 3.0, 3.1, np.pi])
+def test_the_rotation_error_is_the_rotation_vector(turn):
+    rng = np.random.default_rng(1)
+    R = random_rotation(rng)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    from pydrake.common.eigen_geometry import AngleAxis
+
+    R_target = RotationMatrix(AngleAxis(turn, axis)) @ R
+    vector, angle_ = mut._rotation_error(R_target.matrix(), R.matrix())
+    assert angle_ == pytest.approx(turn, abs=1e-7)
+    if 1e-6 < turn < np.pi - 1e-6:
+        np.testing.assert_allclose(vector, turn * axis, atol=1e-7)
+    else:
+        assert np.linalg.norm(vector) == pytest.approx(turn, abs=1e-7)
+
+
+def test_pose_newton_with_rest_finds_the_nearest_joints_on_the_target(scene, frame, ready):
+    adapter = CheckerAdapter(scene)
+    context = scene.plant.CreateDefaultContext()
+    dut = mut.PoseNewton(
+        scene.plant,
+        context,
+        frame,
+        adapter.full,
+        scene.model.arm_indices,
+        adapter.lower,
+        adapter.upper,
+    )
+    X = pose(scene, frame, ready)
+    target = RigidTransform(X.rotation(), X.translation() + [0.1, -0.15, -0.2])
+    plain = dut.solve(ready, target.rotation().matrix(), target.translation(), 100)
+    rest = dut.solve(ready, target.rotation().matrix(), target.translation(), 100, rest=ready)
+    for q in (plain, rest):
+        X_q = pose(scene, frame, q)
+        np.testing.assert_allclose(X_q.translation(), target.translation(), atol=1e-4)
+        assert angle(X_q.rotation(), target.rotation()) < 1e-3
+    # Moving along the self-motion (the Jacobian's null space) gets no nearer the rest.
+    scene.plant.SetPositions(context, adapter.full(rest))
+    J = scene.plant.CalcJacobianSpatialVelocity(
+        context,
+        mut.JacobianWrtVariable.kQDot,
+        frame,
+        np.zeros(3),
+        scene.plant.world_frame(),
+        scene.plant.world_frame(),
+    )[:, scene.model.arm_indices]
+    null = np.linalg.svd(J)[2][-1]
+    assert abs(null @ (ready - rest)) < 1e-3
+    assert np.linalg.norm(rest - ready) <= np.linalg.norm(plain - ready) + 1e-9
+    # Position alone, and a target out of reach.
+    q = dut.solve(ready, None, target.translation() + [0.0, 0.0, 0.1], 100)
+    np.testing.assert_allclose(
+        pose(scene, frame, q).translation(), target.translation() + [0, 0, 0.1], atol=1e-4
+    )
+    assert dut.solve(ready, None, np.array([3.0, 0.0, 0.5]), 50) is None

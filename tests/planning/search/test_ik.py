@@ -128,3 +128,15 @@ def test_obstacles_near_the_target_are_avoided(scene, dut):
         assert np.max(np.abs(fk(scene, result.q).translation() - TARGET)) <= 1.01e-3
     finally:
         scene.remove_object("bar")
+
+
+@pytest.mark.parametrize(
+    "target", [TARGET, np.array([0.4, -0.3, 0.5]), np.array([0.3, 0.4, 0.2])], ids=str
+)
+def test_newton_steps_find_the_programs_answer(scene, dut, monkeypatch, target):
+    """The Newton steps (pulled towards the seed) land where the nonlinear program alone goes
+    from the seed, within a few milliradians."""
+    newton = dut.solve(FRAME, p_WE=target, R_WE=R_DOWN, options=OPTIONS)
+    monkeypatch.setattr(mut.PoseNewton, "solve", lambda *args, **kwargs: None)
+    program = dut.solve(FRAME, p_WE=target, R_WE=R_DOWN, options=OPTIONS)
+    assert np.max(np.abs(newton.q - program.q)) < 0.01

@@ -277,3 +277,44 @@ def test_limits_hold_at_the_waypoints_where_the_acceleration_peaks():
     ts = np.concatenate([np.linspace(0.0, dut.duration, 20001), dut.times])
     a = np.array([dut.sample(t)[2] for t in ts])
     assert np.all(np.abs(a) <= A_MAX * (1 + 1e-6)), np.max(np.abs(a) / A_MAX)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_fast_spline_is_drakes_spline(seed):
+    rng = np.random.default_rng(seed)
+    waypoints = np.cumsum(rng.normal(0.0, rng.uniform(0.01, 0.5), (rng.integers(2, 30), 7)), 0)
+    drake, knots = mut._spline(waypoints)
+    fast, fast_knots = mut._cubic(waypoints)
+    np.testing.assert_array_equal(fast_knots, knots)
+    s = np.linspace(0.0, knots[-1], 500)
+    for order in range(3):
+        expected = (drake if order == 0 else drake.MakeDerivative(order)).vector_values(s).T
+        np.testing.assert_allclose(fast(s, order), expected, atol=1e-9 * 10**order)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_grid_points_are_drakes(seed):
+    from pydrake.multibody.optimization import CalcGridPointsOptions, Toppra
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 30))
+    waypoints = np.cumsum(rng.normal(0.0, rng.uniform(0.005, 0.4), (n, 7)), axis=0)
+    options = CalcGridPointsOptions(
+        max_err=1e-4, max_iter=100, max_seg_length=0.02, min_points=2 * n
+    )
+    drake, knots = mut._spline(waypoints)
+    fast, _ = mut._cubic(waypoints)
+    expected = Toppra.CalcGridPoints(drake, options)
+    np.testing.assert_allclose(mut.grid_points(fast.derivative(2), knots[-1], options), expected)
+
+
+def test_stopping_time_is_the_sum_of_the_rest_to_rest_segments():
+    rng = np.random.default_rng(3)
+    waypoints = np.cumsum(rng.normal(0.0, 0.3, (9, 7)), axis=0)
+    waypoints[4] = waypoints[3]  # a repeat: no time
+    waypoints[6, 1:] = waypoints[5, 1:]  # one joint alone moves
+    expected = sum(
+        mut._Segment(a, b, V_MAX, A_MAX).duration
+        for a, b in zip(waypoints[:-1], waypoints[1:], strict=True)
+    )
+    assert mut.stopping_time(waypoints, V_MAX, A_MAX) == pytest.approx(expected, rel=1e-12)
