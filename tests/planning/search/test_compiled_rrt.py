@@ -10,7 +10,9 @@ from numba import njit
 import planning.search.compiled_rrt as mut
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.collision.sphere_checker import sphere_model
+from planning.collision.sphere_kernel import COLLIDING, UNKNOWN
 from planning.paths import path_length
+from tests.planning.collision.test_sphere_batch import scalar_verdicts
 
 E = np.eye(7)
 FINE = 0.01  # rad
@@ -86,13 +88,33 @@ def test_the_fine_check_names_the_colliding_segment(scene, data, ends):
     assert bad == 1
 
 
-def test_the_fine_check_certifies_whole_runs_of_samples(data, ends):
-    """In the open a FREE sample's clearance covers many 0.01 rad samples at once."""
-    q_a = ends[0]
-    path = np.array([q_a, q_a - 0.5 * E[0]])
-    bad, unknown, _, checks = mut.fine_check(path, FINE, data)
-    assert bad == -1 and len(unknown) == 0
-    assert checks < 50  # of 50 samples
+def test_the_fine_check_agrees_with_classifying_every_sample(scene, data, ends):
+    """The batched fine check finds what the scalar kernel finds sample by sample: the first
+    segment with a COLLIDING sample, and the UNKNOWN samples before it, in order."""
+    q_a, q_b = ends
+    rng = np.random.default_rng(3)
+    collided = clear = undecided_met = False
+    for _ in range(20):
+        path = np.vstack([q_a, q_a + rng.normal(0.0, 0.4, (3, 7)), q_b])
+        samples, owners = [], []
+        for s, (a, b) in enumerate(zip(path[:-1], path[1:], strict=True)):
+            n = max(1, int(np.ceil(np.linalg.norm(b - a) / FINE)))
+            samples += [a + (i / n) * (b - a) for i in range(1, n + 1)]
+            owners += [s] * n
+        state = scalar_verdicts(np.array(samples), data)
+        colliding = np.flatnonzero(state == COLLIDING)
+        stop = colliding[0] if len(colliding) else len(samples)
+        expected_bad = owners[stop] if len(colliding) else -1
+        undecided = [k for k in range(stop) if state[k] == UNKNOWN]
+        bad, unknown, segment, checks = mut.fine_check(path, FINE, data)
+        assert bad == expected_bad
+        np.testing.assert_array_equal(unknown, np.array(samples)[undecided].reshape(-1, 7))
+        np.testing.assert_array_equal(segment, np.array(owners, dtype=int)[undecided])
+        assert checks >= stop
+        collided |= bad >= 0
+        clear |= bad < 0
+        undecided_met |= len(undecided) > 0
+    assert collided and clear and undecided_met  # every outcome was met
 
 
 def test_the_generator_is_the_same_everywhere():
@@ -110,15 +132,7 @@ def test_the_generator_is_the_same_everywhere():
 @njit
 def _edge_free(q_a, q_b, step, d, anchors, anchor_radius):
     """``_free`` with fresh scratch arrays (they do not box back into Python from the cache)."""
-    scratch = (
-        mut._work(d),
-        np.zeros(len(d.body_step) + len(d.body_pair)),
-        np.empty(len(q_a)),
-        np.zeros(1, dtype=np.int64),
-        anchors,
-        anchor_radius,
-    )
-    return mut._free(q_a, q_b, step, d, scratch)
+    return mut._free(q_a, q_b, step, d, mut.make_scratch(d, len(q_a), anchors, anchor_radius))
 
 
 def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
