@@ -8,13 +8,15 @@ distances. Culling is shared by the lanes: an object is near a body when it is n
 in any lane, and a group, group pair or sphere is tested when any lane needs it; the verdict of
 a lane only counts the tests that lane itself needs, so every lane gets the verdict
 ``_classify_one`` gives its configuration with ``stop_at_unknown`` false (COLLIDING when a
-sphere proves a collision, else UNKNOWN when one cannot decide, else FREE). The lanes of one
-batch are the samples of one edge, close together, so they mostly need the same tests.
+sphere proves a collision, else UNKNOWN when one cannot decide, else FREE). The lanes of a batch
+are consecutive samples along a path, close together, so they mostly need the same tests.
 
-No certificates (clearance radii) here: the batch is for checking every sample of an edge
-(the fine check, and the search's edges in bisection order), where skipping samples one
-certificate at a time is not worth its cost (measured on the MBM paths: the median radius is
-0.001 to 0.006 rad, below the 0.01 rad between fine samples).
+No certificates (clearance radii) here: the batch is for checking every sample of a path (the
+fine check, ``compiled_rrt._fine_check``), where skipping samples one certificate at a time is
+not worth its cost (measured on the MBM paths: the median radius is 0.001 to 0.006 rad, below
+the 0.01 rad between fine samples). ``FIRST_BLOCK`` mode answers whether any lane blocks an
+edge; the search's edges do not use it now (their bisection levels in batches measured no
+faster than one sample at a time: the edges are short, and a blocked one shows it early).
 """
 
 from __future__ import annotations
