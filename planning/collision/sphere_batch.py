@@ -158,7 +158,7 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         qs: (>= count, 7) configurations.
         count: how many rows to classify.
         d: the sphere model's ``KernelData``.
-        work: ``batch_work(d)``.
+        work: ``batch_work(d, lanes)`` with lanes >= count.
         mode: FULL, every lane's verdict (stopping early only when all lanes collide); or
             FIRST_BLOCK, stop as soon as a lane is COLLIDING, or UNKNOWN with ``excused`` false.
         excused: (>= count,) bool, FIRST_BLOCK's UNKNOWN lanes that do not block.
@@ -177,13 +177,12 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
     # A non-finite configuration is UNKNOWN (never proven free), computed at 0 so that no NaN
     # reaches a comparison.
     for lane in range(lanes):
-        row = lane
         colliding[lane] = False
         bad[lane] = False
         for i in range(len(d.template)):
             fulls[i, lane] = d.template[i]
         for j in range(len(d.arm)):
-            x = qs[row, j]
+            x = qs[lane, j]
             if not np.isfinite(x):
                 bad[lane] = True
                 x = 0.0
