@@ -142,7 +142,7 @@ def _free(q_a, q_b, step, d, scratch, end_known=False):
     (``sphere_batch``) measured no faster, the search's edges being short). With certificates
     worth having (``step`` below ``_MARCH_BELOW``), samples after the end are checked in order
     instead, each FREE one certifying those within its radius."""
-    work, lam, q, counter, anchors, anchor_radius = scratch[:6]
+    work, lam, q, counter, anchors, anchor_radius = scratch
     if not end_known:
         first, n = edge_prefix(q_b, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
         if first < n:
@@ -215,7 +215,7 @@ def _rrt_connect(
                 if gap <= 1e-9:
                     reached = other
                 else:
-                    work, lam, q, _, anchors, anchor_radius = scratch[:6]
+                    work, lam, q, _, anchors, anchor_radius = scratch
                     first, n = edge_prefix(
                         nodes[b][other],
                         q_new,
@@ -354,16 +354,18 @@ def _drop_duplicates(path):
 
 
 @njit(cache=True)
-def _fine_check(path, step, d, scratch):
+def _fine_check(path, step, d, counter):
     """Checks every sample of every segment of the path at ``step`` (t = i/n, i = 1..n,
     n = ceil(length / step)), ``LANES`` samples per batch (``sphere_batch``), in order; UNKNOWN
-    samples are set aside. Returns (the first segment with a COLLIDING sample, or -1; the
-    UNKNOWN samples before it (K, 7); their segments (K,))."""
-    counter = scratch[3]
-    batch_work, batch, verdict, excused = scratch[6], scratch[7], scratch[8], scratch[9]
-    lanes = len(verdict)
-    excused[:] = False
+    samples are set aside; ``counter[0]`` counts the samples classified. Returns (the first
+    segment with a COLLIDING sample, or -1; the UNKNOWN samples before it (K, 7); their
+    segments (K,))."""
+    lanes = sphere_batch.LANES
     dim = path.shape[1]
+    batch_work = sphere_batch.batch_work(d, lanes)
+    batch = np.empty((lanes, dim))
+    verdict = np.empty(lanes, dtype=np.int64)
+    excused = np.zeros(lanes, dtype=np.bool_)  # FULL mode reads none
     owner = np.empty(lanes, dtype=np.int64)
     unknown = np.empty((16, dim))
     segment = np.empty(16, dtype=np.int64)
@@ -404,12 +406,9 @@ def _fine_check(path, step, d, scratch):
 
 @njit(cache=True)
 def make_scratch(d, dim, anchors, anchor_radius):
-    """The scratch arrays of a search and its edge checks: the scalar kernel's (``_work``),
-    the speed bounds (L + Q,), a configuration (dim,), the count of configurations classified
-    (1,), the ``anchors`` (K, dim) and ``anchor_radius`` (rad) of ``edge_prefix``, then the
-    batches': ``sphere_batch.batch_work``, the samples (LANES, dim), their verdicts and
-    whether each is excused (LANES,)."""
-    lanes = sphere_batch.LANES
+    """The scratch arrays of a search's edge checks: the scalar kernel's (``_work``), the speed
+    bounds (L + Q,), a configuration (dim,), the count of configurations classified (1,), and
+    the ``anchors`` (K, dim) and ``anchor_radius`` (rad) of ``edge_prefix``."""
     return (
         _work(d),
         np.zeros(len(d.body_step) + len(d.body_pair)),
@@ -417,10 +416,6 @@ def make_scratch(d, dim, anchors, anchor_radius):
         np.zeros(1, dtype=np.int64),
         anchors,
         anchor_radius,
-        sphere_batch.batch_work(d, lanes),
-        np.empty((lanes, dim)),
-        np.empty(lanes, dtype=np.int64),
-        np.zeros(lanes, dtype=np.bool_),
     )
 
 
@@ -484,10 +479,9 @@ def plan(
 def fine_check(path, step, d):
     """``_fine_check`` of a path (N, 7) at ``step``, rad: (first COLLIDING segment or -1, the
     UNKNOWN samples, their segments, configurations classified)."""
-    dim = path.shape[1]
-    scratch = make_scratch(d, dim, np.empty((0, dim)), 0.0)
-    bad, unknown, segment = _fine_check(path, step, d, scratch)
-    return bad, unknown, segment, scratch[3][0]
+    counter = np.zeros(1, dtype=np.int64)
+    bad, unknown, segment = _fine_check(path, step, d, counter)
+    return bad, unknown, segment, counter[0]
 
 
 def warm_up(data, lower, upper) -> None:

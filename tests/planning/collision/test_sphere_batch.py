@@ -11,18 +11,8 @@ from planning import PlanningScene
 from planning.collision import sphere_batch as mut
 from planning.collision.checker import CheckerAdapter
 from planning.collision.sphere_checker import sphere_model
-from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, _classify_one, _work
-
-
-@njit
-def scalar_verdicts(qs, d):
-    """The scalar kernel's verdict of each row, stop_at_unknown off."""
-    work = _work(d)
-    lam = np.zeros(len(d.body_step) + len(d.body_pair))
-    out = np.empty(len(qs), dtype=np.int64)
-    for k in range(len(qs)):
-        out[k] = _classify_one(qs[k], d, False, work, lam)[0]
-    return out
+from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN
+from tests.planning.collision.test_sphere_kernel import classify_each
 
 
 @njit
@@ -69,7 +59,7 @@ def test_every_lane_gets_the_scalar_verdict(count):
     for _, scene in _scenes():
         d = sphere_model(scene).kernel_data()
         qs = _samples(scene, seed=count)
-        expected = scalar_verdicts(qs, d)
+        expected = classify_each(qs, d)
         got, _ = _batched(qs, d, count, mut.FULL, np.zeros(count, dtype=np.bool_))
         np.testing.assert_array_equal(got, expected)
         kinds |= set(expected.tolist())
@@ -98,7 +88,7 @@ def test_first_block_stops_exactly_when_a_lane_blocks():
     for _, scene in _scenes():
         d = sphere_model(scene).kernel_data()
         qs = _samples(scene, seed=11)
-        verdicts = scalar_verdicts(qs, d)
+        verdicts = classify_each(qs, d)
         for excuse in (False, True):
             excused = np.full(8, excuse)
             _, blocked = _batched(qs, d, 8, mut.FIRST_BLOCK, excused)

@@ -12,7 +12,7 @@ from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import COLLIDING, UNKNOWN
 from planning.paths import path_length
-from tests.planning.collision.test_sphere_batch import scalar_verdicts
+from tests.planning.collision.test_sphere_kernel import classify_each
 
 E = np.eye(7)
 FINE = 0.01  # rad
@@ -101,7 +101,7 @@ def test_the_fine_check_agrees_with_classifying_every_sample(scene, data, ends):
             n = max(1, int(np.ceil(np.linalg.norm(b - a) / FINE)))
             samples += [a + (i / n) * (b - a) for i in range(1, n + 1)]
             owners += [s] * n
-        state = scalar_verdicts(np.array(samples), data)
+        state = classify_each(np.array(samples), data)
         colliding = np.flatnonzero(state == COLLIDING)
         stop = colliding[0] if len(colliding) else len(samples)
         expected_bad = owners[stop] if len(colliding) else -1
