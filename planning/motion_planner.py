@@ -36,6 +36,7 @@ from planning.scene_objects import describe_scene
 from planning.search import compiled_rrt
 from planning.search.cartesian import cartesian_path
 from planning.search.joint_path import JointPathSearch
+from planning.search.pose_kernel import newton
 from planning.timing import toppra
 from planning.timing.retime import RetimeOptions
 
@@ -56,7 +57,7 @@ class MotionPlanner:
         self._options = options if options is not None else MotionPlannerOptions()
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
-        announce_compile(compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve)
+        announce_compile(compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, newton)
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA
         if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.spheres.slack)

@@ -26,13 +26,16 @@ kinematics alone) keeps that short: each compiled entry point costs its own opti
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import threading
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.core.caching import NullCache
 
 FREE, COLLIDING, UNKNOWN = 0, 1, 2
 # Columns of an object row: kind, W (9), offset (3), sizes (3), lower (3), upper (3).
@@ -536,3 +539,33 @@ def announce_compile(*others) -> bool:
             return False
     print(COMPILE_NOTE, file=sys.stderr, flush=True)
     return True
+
+
+def refresh_cache(module, sources, cache_dir) -> None:
+    """Drops the cached machine code of ``module``'s compiled functions when one of the
+    ``sources`` (paths: the module's own file and those whose compiled code it inlines, this
+    kernel's above all) changed.
+
+    Numba keys a cached function on its own file's time stamp only, while a function that
+    calls this kernel's compiles the kernel's code into its own: after a change of the kernel
+    alone (a ``git pull``), its stale code would run against the new data layout and crash. A
+    hash of the sources is kept beside the cache; when it differs, the caches of the functions
+    defined in ``module`` are emptied (numba then compiles them again, once). When that cannot
+    be done (a read-only cache), they are not cached at all.
+    """
+    digest = hashlib.sha256(b"".join(Path(p).read_bytes() for p in sources)).hexdigest()
+    dispatchers = [
+        v
+        for v in vars(module).values()
+        if hasattr(v, "py_func") and v._cache and v.py_func.__module__ == module.__name__
+    ]
+    try:
+        marker = Path(cache_dir) / f"{Path(module.__file__).stem}.kernel.sha256"
+        if marker.is_file() and marker.read_text() == digest:
+            return
+        for dispatcher in dispatchers:
+            dispatcher._cache.flush()
+        marker.write_text(digest)
+    except OSError:
+        for dispatcher in dispatchers:
+            dispatcher._cache = NullCache()

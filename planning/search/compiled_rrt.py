@@ -26,13 +26,11 @@ from an xorshift64* generator seeded with SplitMix64, so they are the same on ev
 
 from __future__ import annotations
 
-import hashlib
 import sys
 from pathlib import Path
 
 import numpy as np
 from numba import njit
-from numba.core.caching import NullCache
 
 from planning.collision import sphere_batch, sphere_kernel
 from planning.collision.sphere_batch import FULL, classify_batch
@@ -44,6 +42,7 @@ from planning.collision.sphere_kernel import (
     _near_any,
     _work,
     edge_prefix,
+    refresh_cache,
 )
 
 FOUND, GAVE_UP = 0, 1
@@ -493,29 +492,9 @@ def warm_up(data, lower, upper) -> None:
     fine_check(np.vstack([q, q]), 0.01, data)
 
 
-def _refresh_cache(module, cache_dir: Path) -> None:
-    """Drops this module's cached machine code when the collision kernel's source changed.
-
-    Numba keys a cached function on its own file's time stamp only, while these functions
-    compile the kernel's (``sphere_kernel``) into theirs: after a change of the kernel alone (a
-    ``git pull``), their stale code would run against the new data layout and crash. A hash of
-    both sources is kept beside the cache; when it differs, every cache of this module is
-    emptied (numba then compiles again, once). When that cannot be done (a read-only cache),
-    this module's functions are not cached at all.
-    """
-    sources = (Path(module.__file__), Path(sphere_kernel.__file__), Path(sphere_batch.__file__))
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()
-    dispatchers = [v for v in vars(module).values() if hasattr(v, "py_func") and v._cache]
-    try:
-        marker = Path(cache_dir) / f"{Path(module.__file__).stem}.kernel.sha256"
-        if marker.is_file() and marker.read_text() == digest:
-            return
-        for dispatcher in dispatchers:
-            dispatcher._cache.flush()
-        marker.write_text(digest)
-    except OSError:
-        for dispatcher in dispatchers:
-            dispatcher._cache = NullCache()
-
-
-_refresh_cache(sys.modules[__name__], Path(plan._cache._cache_path))
+# Numba keys a cached function on its own file alone; these compile the kernels' code into theirs.
+refresh_cache(
+    sys.modules[__name__],
+    [Path(__file__), Path(sphere_kernel.__file__), Path(sphere_batch.__file__)],
+    Path(plan._cache._cache_path),
+)

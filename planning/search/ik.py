@@ -30,9 +30,11 @@ from pydrake.multibody.inverse_kinematics import (
 )
 from pydrake.solvers import Solve
 
+from planning.collision.sphere_kernel import announce_compile
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
 from planning.model.layout import NUM_ARM_JOINTS
+from planning.search import pose_kernel
 from planning.search.cartesian import PoseNewton
 
 _REACH_MARGIN = 0.02  # m added to the computed reach bound
@@ -67,6 +69,8 @@ class IkSolver:
 
     def __init__(self, scene):
         self._scene = scene
+        announce_compile(pose_kernel.newton)
+        pose_kernel.warm_up()  # the compiled Newton steps, compiled or loaded now
         self._checker_context = scene.checker.MakeStandaloneModelContext()
         plant = scene.plant
         self._context = plant.CreateDefaultContext()
@@ -121,13 +125,7 @@ class IkSolver:
 
         ik, q_vars = self._make_program(frame, p_WE, R_WE, options)
         newton = PoseNewton(
-            plant,
-            self._context,
-            frame,
-            scene.full_q,
-            scene.model.arm_indices,
-            self._lower,
-            self._upper,
+            plant, frame, scene.full_q, scene.model.arm_indices, self._lower, self._upper
         )
         rng = np.random.default_rng(options.seed)
         why = "no attempt converged"

@@ -1,6 +1,7 @@
 """The compiled sphere kernel (planning.collision.sphere_kernel)."""
 
 import importlib.util
+import types
 import uuid
 
 import numba.core.config
@@ -307,3 +308,41 @@ def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
         assert (first, n) == (every[0], n_every[0])
         fewer += checks < min(first + 1, n)
     assert fewer > 10
+
+
+class _FakeDispatcher:
+    """Stands in for a numba dispatcher with a cache: counts flushes."""
+
+    def __init__(self, module):
+        self.flushes = 0
+        self._cache = self
+        self.py_func = types.SimpleNamespace(__module__=module)  # where it is defined
+
+    def flush(self):
+        self.flushes += 1
+
+
+def test_a_changed_kernel_source_empties_the_cache(tmp_path, monkeypatch):
+    source = tmp_path / "planner.py"
+    source.write_text("one")
+    dispatcher = _FakeDispatcher("planner")
+    other = _FakeDispatcher("kernel")  # imported from another module: its cache is that module's
+    module = types.SimpleNamespace(
+        __file__=str(source), __name__="planner", plan=dispatcher, kernel_function=other
+    )
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    mut.refresh_cache(module, [source], cache)  # no hash yet: emptied, hash written
+    mut.refresh_cache(module, [source], cache)  # same sources: kept
+    assert dispatcher.flushes == 1
+    source.write_text("two")  # (the kernel's source is hashed with it the same way)
+    mut.refresh_cache(module, [source], cache)
+    assert dispatcher.flushes == 2 and other.flushes == 0
+    source.write_text("three")
+
+    def read_only(*args, **kwargs):
+        raise PermissionError("read-only")
+
+    monkeypatch.setattr(mut.Path, "write_text", read_only)  # the functions are not cached at all
+    mut.refresh_cache(module, [source], cache)
+    assert isinstance(dispatcher._cache, mut.NullCache)

@@ -7,6 +7,7 @@ achieved and why."""
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.tree import JacobianWrtVariable
 
 import planning.search.cartesian as mut
 from planning import PlanningScene
@@ -157,29 +158,11 @@ def test_the_line_slerps_as_drake_does_the_shorter_way():
             )
 
 
-@pytest.mark.parametrize("turn", [0.0, 1e-10, 0.3, 2.0, 3.0, 3.1, np.pi])
-def test_the_rotation_error_is_the_rotation_vector(turn):
-    rng = np.random.default_rng(1)
-    R = random_rotation(rng)
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    from pydrake.common.eigen_geometry import AngleAxis
-
-    R_target = RotationMatrix(AngleAxis(turn, axis)) @ R
-    vector, angle_ = mut._rotation_error(R_target.matrix(), R.matrix())
-    assert angle_ == pytest.approx(turn, abs=1e-7)
-    if 1e-6 < turn < np.pi - 1e-6:
-        np.testing.assert_allclose(vector, turn * axis, atol=1e-7)
-    else:
-        assert np.linalg.norm(vector) == pytest.approx(turn, abs=1e-7)
-
-
 def test_pose_newton_with_rest_finds_the_nearest_joints_on_the_target(scene, frame, ready):
     adapter = CheckerAdapter(scene)
     context = scene.plant.CreateDefaultContext()
     dut = mut.PoseNewton(
         scene.plant,
-        context,
         frame,
         adapter.full,
         scene.model.arm_indices,
@@ -198,7 +181,7 @@ def test_pose_newton_with_rest_finds_the_nearest_joints_on_the_target(scene, fra
     scene.plant.SetPositions(context, adapter.full(rest))
     J = scene.plant.CalcJacobianSpatialVelocity(
         context,
-        mut.JacobianWrtVariable.kQDot,
+        JacobianWrtVariable.kQDot,
         frame,
         np.zeros(3),
         scene.plant.world_frame(),

@@ -153,45 +153,6 @@ def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
     assert not _edge_free(free, undecided, 0.1, data, (undecided + 0.01)[None, :], 0.05)
 
 
-class _FakeDispatcher:
-    """Stands in for a numba dispatcher with a cache: counts flushes."""
-
-    def __init__(self):
-        self.flushes = 0
-        self._cache = self
-
-    def py_func(self):
-        pass
-
-    def flush(self):
-        self.flushes += 1
-
-
-def test_a_changed_kernel_source_empties_the_cache(tmp_path, monkeypatch):
-    import types
-
-    source = tmp_path / "planner.py"
-    source.write_text("one")
-    dispatcher = _FakeDispatcher()
-    module = types.SimpleNamespace(__file__=str(source), plan=dispatcher)
-    cache = tmp_path / "cache"
-    cache.mkdir()
-    mut._refresh_cache(module, cache)  # no hash yet: emptied, hash written
-    mut._refresh_cache(module, cache)  # same sources: kept
-    assert dispatcher.flushes == 1
-    source.write_text("two")  # (the kernel's source is hashed with it the same way)
-    mut._refresh_cache(module, cache)
-    assert dispatcher.flushes == 2
-    source.write_text("three")
-
-    def read_only(*args, **kwargs):
-        raise PermissionError("read-only")
-
-    monkeypatch.setattr(mut.Path, "write_text", read_only)  # the functions are not cached at all
-    mut._refresh_cache(module, cache)
-    assert isinstance(dispatcher._cache, mut.NullCache)
-
-
 def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
     q_a = ends[0]
     bad = q_a.copy()
