@@ -37,7 +37,7 @@ from planning.search import compiled_rrt
 from planning.search.cartesian import cartesian_path
 from planning.search.joint_path import JointPathSearch
 from planning.search.pose_kernel import newton
-from planning.timing import toppra
+from planning.timing import cubic, toppra
 from planning.timing.retime import RetimeOptions
 
 __all__ = ["MotionPlanner", "MotionPlannerOptions", "load_planner_options"]
@@ -57,8 +57,11 @@ class MotionPlanner:
         self._options = options if options is not None else MotionPlannerOptions()
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
-        announce_compile(compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, newton)
-        toppra.warm_up()  # the time parameterisation's compiled TOPP-RA
+        announce_compile(
+            compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, cubic.evaluate, newton
+        )
+        toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
+        cubic.warm_up()
         if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
             sphere_model(scene, self._options.spheres.slack)
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
