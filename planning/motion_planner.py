@@ -209,16 +209,18 @@ class MotionPlanner:
         if not plant.HasFrameNamed(name, scene.model.instance):
             raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the Panda has no frame {name!r}")
         opts = self._options
+        frame_E = plant.GetFrameByName(name, scene.model.instance)
         result = cartesian_path(
             scene,
             self._search.adapter(opts.validation.resolution),
-            plant.GetFrameByName(name, scene.model.instance),
+            frame_E,
             q_start,
             X_WG,
             max_step=opts.cartesian.step,
             max_rotation_step=opts.cartesian.rotation_step,
             jump_threshold=opts.cartesian.jump_threshold,
             resolution=opts.validation.resolution,
+            solver=self._state.ik_solver().newton(frame_E),
         )
         plan = self._make_plan(result.waypoints, "cartesian", t0)
         if result.fraction < 1.0:

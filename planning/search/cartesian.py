@@ -20,7 +20,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from planning.collision.sphere_fk import BatchedKinematics
 from planning.paths import densify
-from planning.search.pose_kernel import newton
+from planning.search.pose_kernel import frame_pose, newton
 
 _MAX_ITERATIONS = 30
 _NO_ROTATION = np.eye(3)  # placeholders of an unused target
@@ -77,6 +77,7 @@ def cartesian_path(
     max_rotation_step: float,
     jump_threshold: float,
     resolution: float,
+    solver: PoseNewton | None = None,
 ) -> CartesianPath:
     """Follows the straight line from the frame's pose at q_start to X_WG.
 
@@ -90,19 +91,20 @@ def cartesian_path(
         max_rotation_step: largest rotation per step, rad.
         jump_threshold: largest change of any joint per step, rad.
         resolution: joint-space collision check step, rad.
+        solver: the frame's ``PoseNewton`` (made here when None; ``IkSolver.newton`` keeps
+            one per frame).
     """
-    plant = scene.plant
-    context = plant.CreateDefaultContext()
-    X_WS = _pose(plant, context, frame, scene.full_q(q_start))
+    if solver is None:
+        solver = PoseNewton(
+            scene.plant, frame, scene.full_q, scene.model.arm_indices, adapter.lower, adapter.upper
+        )
+    X_WS = solver.pose(q_start)
     distance = np.linalg.norm(X_WG.translation() - X_WS.translation())
     angle = (X_WS.rotation().inverse() @ X_WG.rotation()).ToAngleAxis().angle()
     steps = max(1, int(np.ceil(max(distance / max_step, angle / max_rotation_step))))
     R_targets, p_targets = _line(X_WS, X_WG, np.arange(1, steps + 1) / steps)
     # Every IK step first (cheap), then one batched collision check of the whole line.
     path, q, reason = [np.asarray(q_start, float)], np.asarray(q_start, float), ""
-    solver = PoseNewton(
-        plant, frame, adapter.full, scene.model.arm_indices, adapter.lower, adapter.upper
-    )
     for k in range(steps):
         # Start from the last step's joint change repeated: along a straight line the next
         # joints are that close to second order, and the first check often passes.
@@ -129,11 +131,6 @@ def cartesian_path(
     return CartesianPath(path, 1.0, "")
 
 
-def _pose(plant, context, frame, q_full) -> RigidTransform:
-    plant.SetPositions(context, q_full)
-    return frame.CalcPoseInWorld(context)
-
-
 class PoseNewton:
     """Damped Newton steps on the pose error of a frame (see the module docstring), one
     compiled call per solve (``planning.search.pose_kernel``: the frame's kinematic chain and
@@ -157,6 +154,13 @@ class PoseNewton:
         self._full, self._arm = full, np.asarray(arm, dtype=np.int64)
         self._lower = np.ascontiguousarray(lower, dtype=float)
         self._upper = np.ascontiguousarray(upper, dtype=float)
+
+    def pose(self, q) -> RigidTransform:
+        """X_WE at the arm joints q (7,)."""
+        full = np.ascontiguousarray(self._full(np.asarray(q, dtype=float)), dtype=float)
+        T, X = np.empty((len(self._chain[0]), 3, 4)), np.empty((3, 4))
+        frame_pose(full, *self._chain, self._body, self._X_BE, T, X)
+        return RigidTransform(X)
 
     def solve(self, q0, R_T=None, p_T=None, iterations: int = _MAX_ITERATIONS, rest=None):
         """Joints placing the frame at the orientation R_T and/or position p_T (None: free)

@@ -77,6 +77,7 @@ class IkSolver:
         arm = scene.model.arm_indices
         self._lower = plant.GetPositionLowerLimits()[arm]
         self._upper = plant.GetPositionUpperLimits()[arm]
+        self._newtons: dict[int, PoseNewton] = {}  # by frame index
 
     def solve(
         self,
@@ -124,9 +125,7 @@ class IkSolver:
         )
 
         ik, q_vars = self._make_program(frame, p_WE, R_WE, options)
-        newton = PoseNewton(
-            plant, frame, scene.full_q, scene.model.arm_indices, self._lower, self._upper
-        )
+        newton = self.newton(frame)
         rng = np.random.default_rng(options.seed)
         why = "no attempt converged"
         attempts = 0
@@ -160,6 +159,17 @@ class IkSolver:
             f"no IK solution for {frame_name} after {attempts} attempts in "
             f"{time.perf_counter() - start:.2f} s ({why})",
         )
+
+    def newton(self, frame) -> PoseNewton:
+        """The damped Newton steps placing ``frame`` (a Panda frame), made on the first call
+        for that frame (reading its kinematic chain costs about half a millisecond)."""
+        key = int(frame.index())
+        if key not in self._newtons:
+            scene = self._scene
+            self._newtons[key] = PoseNewton(
+                scene.plant, frame, scene.full_q, scene.model.arm_indices, self._lower, self._upper
+            )
+        return self._newtons[key]
 
     def _make_program(self, frame, p_WE, R_WE, options: IkOptions):
         scene, plant = self._scene, self._scene.plant

@@ -170,6 +170,7 @@ def test_pose_newton_with_rest_finds_the_nearest_joints_on_the_target(scene, fra
         adapter.upper,
     )
     X = pose(scene, frame, ready)
+    np.testing.assert_allclose(dut.pose(ready).GetAsMatrix4(), X.GetAsMatrix4(), atol=1e-12)
     target = RigidTransform(X.rotation(), X.translation() + [0.1, -0.15, -0.2])
     plain = dut.solve(ready, target.rotation().matrix(), target.translation(), 100)
     rest = dut.solve(ready, target.rotation().matrix(), target.translation(), 100, rest=ready)
