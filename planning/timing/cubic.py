@@ -104,6 +104,73 @@ def clamped(knots, values, first, last):
     return hermite(knots, values, slopes)
 
 
+@njit(cache=True)
+def grid(c, knots, order, end, max_err, max_iter, max_seg_length, min_points):
+    """Grid points on [0, end] by the rule of Drake's ``Toppra.CalcGridPoints`` for the curve's
+    ``order``-th derivative q'' (the path's second): rounds that halve every interval longer
+    than ``max_seg_length`` or whose linear interpolation errs by more than ``max_err``
+    (0.5 h^2 max |q''(midpoint)|), at most ``max_iter`` rounds, then halving all intervals
+    until there are ``min_points`` points."""
+    points = np.array([0.0, end])
+    for _ in range(max_iter):
+        mid = 0.5 * (points[:-1] + points[1:])
+        ddq = evaluate(c, knots, mid, order)
+        split = np.zeros(len(mid), dtype=np.bool_)
+        for k in range(len(mid)):
+            length = points[k + 1] - points[k]
+            peak = 0.0
+            for j in range(ddq.shape[1]):
+                peak = max(peak, abs(ddq[k, j]))
+            split[k] = length > max_seg_length or 0.5 * length * length * peak > max_err
+        if not split.any():
+            break
+        points = _insert(points, mid, split)
+    while len(points) < min_points:
+        mid = 0.5 * (points[:-1] + points[1:])
+        points = _insert(points, mid, np.ones(len(mid), dtype=np.bool_))
+    return points
+
+
+@njit(cache=True)
+def _insert(points, mid, split):
+    """The sorted points with the midpoints ``mid[k]`` of the intervals where ``split``."""
+    out = np.empty(len(points) + split.sum())
+    n = 0
+    for k in range(len(points)):
+        out[n] = points[k]
+        n += 1
+        if k < len(mid) and split[k]:
+            out[n] = mid[k]
+            n += 1
+    return out
+
+
+@njit(cache=True)
+def chord_deviation(c, knots, values, samples):
+    """Per knot interval, the largest distance of the curve from the chord between its values
+    at the ends (``values`` (n + 1, J)), at ``samples`` - 1 points evenly spaced inside."""
+    n = len(knots) - 1
+    dims = values.shape[1]
+    out = np.zeros(n)
+    x = np.empty(1)
+    for k in range(n):
+        length2 = 0.0
+        for j in range(dims):
+            length2 += (values[k + 1, j] - values[k, j]) ** 2
+        for m in range(1, samples):
+            x[0] = knots[k] + (m / samples) * (knots[k + 1] - knots[k])
+            q = evaluate(c, knots, x, 0)[0]
+            along = 0.0
+            for j in range(dims):
+                along += (q[j] - values[k, j]) * (values[k + 1, j] - values[k, j])
+            lam = min(max(along / length2, 0.0), 1.0) if length2 > 0.0 else 0.0
+            gap = 0.0
+            for j in range(dims):
+                gap += (q[j] - values[k, j] - lam * (values[k + 1, j] - values[k, j])) ** 2
+            out[k] = max(out[k], np.sqrt(gap))
+    return out
+
+
 class Curve:
     """A piecewise cubic (knots (n + 1,), coefficients (4, n, J)), or one of its derivatives
     (``order``): called on points (M,) it returns (M, J) (its ``nu``-th derivative with
@@ -131,3 +198,5 @@ def warm_up() -> None:
     values = np.zeros((3, 7))
     c = clamped(knots, values, values[0], values[0])
     evaluate(c, knots, knots, 0)
+    grid(c, knots, 2, 2.0, 1e-4, 100, 0.02, 4)
+    chord_deviation(c, knots, values, 16)

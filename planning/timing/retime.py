@@ -191,38 +191,27 @@ def _cubic(waypoints: np.ndarray):
     return cubic.Curve(knots, cubic.clamped(knots, values, first, last)), knots
 
 
-def grid_points(ddq, end: float, options) -> np.ndarray:
-    """The TOPP-RA grid on [0, end] by the rule of Drake's ``Toppra.CalcGridPoints``: rounds
-    that halve every interval longer than ``max_seg_length`` or whose linear interpolation
-    errs by more than ``max_err`` (0.5 h^2 max |q''(midpoint)|), at most ``max_iter`` rounds,
-    then halving all intervals until there are ``min_points`` points. ``ddq`` evaluates
-    q''(s) at many points, (M,) -> (M, J)."""
-    grid = np.array([0.0, end])
-    for _ in range(options.max_iter):
-        mid = 0.5 * (grid[:-1] + grid[1:])
-        length = np.diff(grid)
-        split = length > options.max_seg_length
-        error = 0.5 * length**2 * np.max(np.abs(ddq(mid)), axis=1)
-        split |= error > options.max_err
-        if not split.any():
-            break
-        grid = np.sort(np.concatenate([grid, mid[split]]))
-    while len(grid) < options.min_points:
-        grid = np.sort(np.concatenate([grid, 0.5 * (grid[:-1] + grid[1:])]))
-    return grid
+def grid_points(ddq: cubic.Curve, end: float, options) -> np.ndarray:
+    """The TOPP-RA grid on [0, end] by the rule of Drake's ``Toppra.CalcGridPoints``
+    (``cubic.grid``, compiled), ``ddq`` the path's second derivative q''(s)."""
+    return cubic.grid(
+        ddq.c,
+        ddq.knots,
+        ddq.order,
+        float(end),
+        float(options.max_err),
+        int(options.max_iter),
+        float(options.max_seg_length),
+        int(options.min_points),
+    )
 
 
 def spline_deviation(waypoints: np.ndarray) -> np.ndarray:
     """Returns, per waypoint interval, the largest distance (rad) of the spline through the
     waypoints from the straight segment between them (sampled)."""
     path, knots = _cubic(waypoints)
-    u = np.linspace(0.0, 1.0, _SAMPLES_PER_SEGMENT + 1)[1:-1]
-    n = len(knots) - 1
-    x = (knots[:-1, None] + u[None, :] * np.diff(knots)[:, None]).reshape(-1)
-    qs = path(x).reshape(n, len(u), 7)
-    a, d = waypoints[:-1, None, :], np.diff(waypoints, axis=0)[:, None, :]
-    lam = np.clip(np.sum((qs - a) * d, axis=2) / np.sum(d * d, axis=2), 0.0, 1.0)
-    return np.max(np.linalg.norm(qs - a - lam[..., None] * d, axis=2), axis=1)
+    values = np.ascontiguousarray(waypoints, dtype=float)
+    return cubic.chord_deviation(path.c, knots, values, _SAMPLES_PER_SEGMENT)
 
 
 class _Smooth:
