@@ -145,7 +145,6 @@ class SphereCollisionModel:
         slot = {b: k for k, b in enumerate(self._bodies)}
         present = list(sets)
         counts = [len(sets[b].radius) for b in present]
-        owner = np.repeat(present, counts)
         self._slot = np.repeat([slot[b] for b in present], counts).astype(int)
         self._sphere_body = np.repeat(np.arange(len(present)), counts).astype(int)
         p_BS = np.vstack([sets[b].p_BS for b in present])
@@ -155,21 +154,19 @@ class SphereCollisionModel:
         # Groups of up to _GROUP neighbouring spheres of one body, each with a bounding sphere,
         # and a bounding sphere of each body's groups: configurations are culled per body, then
         # per group, before spheres are looked at.
-        groups, bounds, group_body = [], [], []
+        groups, bounds, group_body, body_bounds, point_norm = [], [], [], [], []
         offset = 0
         for k, b in enumerate(present):
-            local, local_bounds = self._body_groups(b, sets[b])
+            local, local_bounds, body_bound, norm = self._body_groups(b, sets[b])
             groups += [(b, m + offset) for m in local]
             bounds += local_bounds
             group_body += [k] * len(local)
+            body_bounds.append(body_bound)
+            point_norm.append(norm)
             offset += len(sets[b].radius)
         group_centre = np.array([c for c, _ in bounds]).reshape(-1, 3)
         group_radius = np.array([r for _, r in bounds])
         group_body = np.array(group_body, dtype=np.int64)
-        body_bounds = [
-            _bound(group_centre[group_body == k], group_radius[group_body == k])
-            for k in range(len(present))
-        ]
         step = self._kin.out  # kinematic step of each of self._bodies
         members = np.zeros((len(groups), _GROUP), dtype=np.int64)
         for g, (_, m) in enumerate(groups):
@@ -182,18 +179,8 @@ class SphereCollisionModel:
         r_out = radius[members[env]] + np.maximum(pad, 0.0) + _MARGIN
         r_in = inner[members[env]]
         body_radius = np.array([r for _, r in body_bounds])
-        # How far from its body's origin any point the checks use lies (speed_table).
         body_centre = np.array([c for c, _ in body_bounds]).reshape(-1, 3)
-        self._point_norm = np.array(
-            [
-                max(
-                    np.linalg.norm(body_centre[k]),
-                    np.linalg.norm(group_centre[group_body == k], axis=1).max(initial=0.0),
-                    np.linalg.norm(p_BS[owner == b], axis=1).max(initial=0.0),
-                )
-                for k, b in enumerate(present)
-            ]
-        )
+        self._point_norm = np.array(point_norm)
         arrays = dict(
             sphere_step=step[self._slot],
             p_BS=p_BS,
@@ -212,8 +199,9 @@ class SphereCollisionModel:
         # Self-collision: group pairs of the body pairs the checker checks, sphere pairs padded
         # to _GROUP**2 per group pair, in runs per body pair.
         checked_bodies = np.zeros((len(present), len(present)), dtype=bool)
+        where = {b: k for k, b in enumerate(present)}
         for a, b in self._checked_body_pairs(present):
-            checked_bodies[present.index(a), present.index(b)] = True
+            checked_bodies[where[a], where[b]] = True
         # Group pairs (g, h) of checked body pairs, sorted by (body of g, body of h, g, h).
         g, h = np.nonzero(checked_bodies[group_body[:, None], group_body[None, :]])
         key = group_body[g] * len(present) + group_body[h]
@@ -222,9 +210,8 @@ class SphereCollisionModel:
         first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if len(key) else key
         body_pairs = [(int(group_body[g[k]]), int(group_body[h[k]])) for k in first]
         run = np.r_[first, len(key)]
-        checked = list(zip(g.tolist(), h.tolist(), strict=True))
         # Every (sphere of g, sphere of h) of each checked group pair, _GROUP**2 per row.
-        shape = (len(checked), _GROUP * _GROUP)
+        shape = (len(g), _GROUP * _GROUP)
         pair_a = np.broadcast_to(members[g][:, :, None], (len(g), _GROUP, _GROUP)).reshape(shape)
         pair_b = np.broadcast_to(members[h][:, None, :], (len(h), _GROUP, _GROUP)).reshape(shape)
         valid = (used[g][:, :, None] & used[h][:, None, :]).reshape(shape)
@@ -246,7 +233,7 @@ class SphereCollisionModel:
             )
             ** 2,
             body_pair_start=np.asarray(run, dtype=np.int64),
-            pair_group=np.array(checked, dtype=np.int64).reshape(-1, 2),
+            pair_group=np.column_stack((g, h)).astype(np.int64).reshape(-1, 2),
             pair_reach2=reach**2,
             pair_a=pair_a,
             pair_b=pair_b,
@@ -257,11 +244,21 @@ class SphereCollisionModel:
 
     def _body_groups(self, body: int, spheres: SphereSet):
         """(groups of the body's spheres as index arrays into ``spheres``, a bounding sphere
-        of each (``_bound``)): kept for the robot's own bodies, whose spheres never change."""
+        of each (``_bound``), one of all those groups, and how far from the body's origin any
+        point the checks use lies (sphere, group or body centre; for ``speed_table``)): kept
+        for the robot's own bodies, whose spheres never change."""
         if body in self._groups_cache and body != self._attachment:
             return self._groups_cache[body]
         local = _groups(np.arange(len(spheres.radius)), spheres.p_BS)
-        out = (local, [_bound(spheres.p_BS[m], spheres.radius[m]) for m in local])
+        bounds = [_bound(spheres.p_BS[m], spheres.radius[m]) for m in local]
+        centres = np.array([c for c, _ in bounds]).reshape(-1, 3)
+        whole = _bound(centres, np.array([r for _, r in bounds]))
+        norm = max(
+            np.linalg.norm(whole[0]),
+            np.linalg.norm(centres, axis=1).max(initial=0.0),
+            np.linalg.norm(spheres.p_BS, axis=1).max(initial=0.0),
+        )
+        out = (local, bounds, whole, norm)
         self._groups_cache[body] = out
         return out
 
