@@ -36,7 +36,7 @@ from planning.scene_objects import describe_scene
 from planning.search import compiled_rrt
 from planning.search.cartesian import cartesian_path
 from planning.search.joint_path import JointPathSearch
-from planning.search.pose_kernel import newton
+from planning.search.pose_kernel import line, newton
 from planning.timing import cubic, toppra
 from planning.timing.retime import RetimeOptions
 
@@ -58,7 +58,7 @@ class MotionPlanner:
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
         announce_compile(
-            compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, cubic.evaluate, newton
+            compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, cubic.evaluate, newton, line
         )
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
         cubic.warm_up()

@@ -17,13 +17,16 @@ def densify(path: np.ndarray, resolution: float) -> tuple[np.ndarray, np.ndarray
         (samples, segment): the samples (M, 7), first and last waypoints included, and the index
         of the path segment each sample lies on.
     """
-    samples, segment = [path[:1]], [0]
-    for i in range(len(path) - 1):
-        n = max(1, int(np.ceil(np.linalg.norm(path[i + 1] - path[i]) / resolution)))
-        s = np.arange(1, n + 1)[:, None] / n
-        samples.append(path[i] + s * (path[i + 1] - path[i]))
-        segment.extend([i] * n)
-    return np.vstack(samples), np.asarray(segment)
+    path = np.asarray(path)
+    steps = np.diff(path, axis=0)
+    ratio = np.linalg.norm(steps, axis=1) / resolution
+    if not np.all(np.isfinite(ratio)):
+        raise ValueError("cannot densify a path with non-finite waypoints")
+    n = np.maximum(1, np.ceil(ratio).astype(np.int64))  # samples per segment, its end included
+    segment = np.repeat(np.arange(len(n)), n)
+    k = np.arange(1, len(segment) + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n per segment
+    samples = path[segment] + (k / n[segment])[:, None] * steps[segment]
+    return np.vstack([path[:1], samples]), np.concatenate([[0], segment])
 
 
 def path_length(path: np.ndarray) -> float:

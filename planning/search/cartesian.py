@@ -20,7 +20,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from planning.collision.sphere_fk import BatchedKinematics
 from planning.paths import densify
-from planning.search.pose_kernel import frame_pose, newton
+from planning.search.pose_kernel import frame_pose, line, newton
 
 _MAX_ITERATIONS = 30
 _NO_ROTATION = np.eye(3)  # placeholders of an unused target
@@ -103,22 +103,13 @@ def cartesian_path(
     angle = (X_WS.rotation().inverse() @ X_WG.rotation()).ToAngleAxis().angle()
     steps = max(1, int(np.ceil(max(distance / max_step, angle / max_rotation_step))))
     R_targets, p_targets = _line(X_WS, X_WG, np.arange(1, steps + 1) / steps)
-    # Every IK step first (cheap), then one batched collision check of the whole line.
-    path, q, reason = [np.asarray(q_start, float)], np.asarray(q_start, float), ""
-    for k in range(steps):
-        # Start from the last step's joint change repeated: along a straight line the next
-        # joints are that close to second order, and the first check often passes.
-        guess = q if len(path) < 2 else np.clip(2.0 * q - path[-2], adapter.lower, adapter.upper)
-        q_next = solver.solve(guess, R_targets[k], p_targets[k])
-        if q_next is None:
-            reason = "no IK solution near the previous step (joint limit or singularity)"
-        elif np.max(np.abs(q_next - q)) > jump_threshold:
-            reason = f"joint jump above {jump_threshold} rad"
-        if reason:
-            break
-        path.append(q_next)
-        q = q_next
-    path = np.asarray(path)
+    # Every IK step first (one compiled call), then one batched collision check of the line.
+    path, status = solver.line(q_start, R_targets, p_targets, jump_threshold)
+    reason = ""
+    if status == 1:
+        reason = "no IK solution near the previous step (joint limit or singularity)"
+    elif status == 2:
+        reason = f"joint jump above {jump_threshold} rad"
     if len(path) > 1:
         samples, segment = densify(path, resolution)
         free = adapter.configs_free(samples)
@@ -161,6 +152,25 @@ class PoseNewton:
         T, X = np.empty((len(self._chain[0]), 3, 4)), np.empty((3, 4))
         frame_pose(full, *self._chain, self._body, self._X_BE, T, X)
         return RigidTransform(X)
+
+    def line(self, q_start, R_targets, p_targets, jump_threshold: float):
+        """The joints along a line of poses (``pose_kernel.line``): (path (M, 7) from q_start,
+        status: 0 complete, 1 a pose not reached, 2 a joint jump above ``jump_threshold``)."""
+        q_start = np.array(q_start, dtype=float).reshape(-1)
+        return line(
+            q_start,
+            np.ascontiguousarray(self._full(q_start), dtype=float),
+            self._arm,
+            *self._chain,
+            self._body,
+            self._X_BE,
+            self._lower,
+            self._upper,
+            np.ascontiguousarray(R_targets, dtype=float),
+            np.ascontiguousarray(p_targets, dtype=float),
+            float(jump_threshold),
+            _MAX_ITERATIONS,
+        )
 
     def solve(self, q0, R_T=None, p_T=None, iterations: int = _MAX_ITERATIONS, rest=None):
         """Joints placing the frame at the orientation R_T and/or position p_T (None: free)

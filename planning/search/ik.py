@@ -69,7 +69,7 @@ class IkSolver:
 
     def __init__(self, scene):
         self._scene = scene
-        announce_compile(pose_kernel.newton)
+        announce_compile(pose_kernel.newton, pose_kernel.line)
         pose_kernel.warm_up()  # the compiled Newton steps, compiled or loaded now
         self._checker_context = scene.checker.MakeStandaloneModelContext()
         plant = scene.plant

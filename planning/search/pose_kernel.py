@@ -274,8 +274,60 @@ def newton(
     return False, q
 
 
+@njit(cache=True)
+def line(
+    q_start,
+    template,
+    arm,
+    parent,
+    kind,
+    q_index,
+    terms,
+    body,
+    X_BE,
+    lower,
+    upper,
+    R_targets,
+    p_targets,
+    jump_threshold,
+    iterations,
+):
+    """``newton`` from each pose of a line (R_targets (K, 3, 3), p_targets (K, 3)) to the next,
+    from q_start, each solve starting from the last joint change repeated (along a straight
+    line the next joints are that close to second order) and accepted when no joint moves
+    more than ``jump_threshold`` rad.
+
+    Returns:
+        (path (M, 7): q_start and the joints of the poses reached in order, status: 0 every
+        pose reached, 1 a solve failed, 2 a joint jumped).
+    """
+    dims = len(q_start)
+    path = np.empty((len(p_targets) + 1, dims))
+    path[0] = q_start
+    guess = np.empty(dims)
+    for k in range(len(p_targets)):
+        for j in range(dims):
+            guess[j] = path[k, j]
+            if k > 0:
+                guess[j] = min(max(2.0 * path[k, j] - path[k - 1, j], lower[j]), upper[j])
+        found, q = newton(
+            guess, template, arm, parent, kind, q_index, terms, body, X_BE, lower, upper,
+            R_targets[k], p_targets[k], True, True, iterations, guess, False,
+        )  # fmt: skip
+        if not found:
+            return path[: k + 1].copy(), 1
+        jump = 0.0
+        for j in range(dims):
+            jump = max(jump, abs(q[j] - path[k, j]))
+        if jump > jump_threshold:
+            return path[: k + 1].copy(), 2
+        path[k + 1] = q
+    return path, 0
+
+
 def warm_up() -> None:
-    """Compiles (first run on a machine) or loads ``newton`` now rather than in a request: a
+    """Compiles (first run on a machine) or loads ``newton`` and ``line`` now rather than in a
+    request: a
     two-joint chain (one revolute step, one weld), position and orientation, with a rest."""
     terms = np.zeros((2, 3, 3, 4))
     terms[:, 0, :, :3] = np.eye(3)
@@ -284,6 +336,11 @@ def warm_up() -> None:
         q, q, np.zeros(1, dtype=np.int64), np.array([-1, 0]), np.array([1, 0]),
         np.zeros(2, dtype=np.int64), terms, 1, np.eye(4)[:3], q - 1.0, q + 1.0,
         np.eye(3), np.zeros(3), True, True, 1, q, True,
+    )  # fmt: skip
+    line(
+        q, q, np.zeros(1, dtype=np.int64), np.array([-1, 0]), np.array([1, 0]),
+        np.zeros(2, dtype=np.int64), terms, 1, np.eye(4)[:3], q - 1.0, q + 1.0,
+        np.eye(3)[None], np.zeros((1, 3)), 0.2, 1,
     )  # fmt: skip
 
 

@@ -81,3 +81,10 @@ def test_drop_duplicates_removes_waypoints_equal_to_their_predecessor():
     assert len(mut.drop_duplicates(near)) == 3
     assert len(mut.drop_duplicates(near, tolerance=1e-3)) == 2
     np.testing.assert_array_equal(mut.drop_duplicates(a[None]), a[None])
+
+
+def test_densify_refuses_a_non_finite_path():
+    path = random_path(3)
+    path[1, 2] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        mut.densify(path, 0.1)

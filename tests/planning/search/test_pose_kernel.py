@@ -106,3 +106,33 @@ def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
             q0, False,
         )  # fmt: skip
         assert not found
+
+
+def test_a_line_of_poses_is_solved_step_by_step_and_stops_at_a_jump_or_a_miss(scene):
+    frame, chain, body, X_BE, arm = chain_of(scene, scene.config.model.ee_frame)
+    adapter = CheckerAdapter(scene)
+    lower, upper = adapter.lower, adapter.upper
+    template = scene.full_q(np.zeros(7))
+    q0 = scene.model.named_configurations["ready"][:7].astype(float)
+    T, X = np.empty((len(chain[0]), 3, 4)), np.empty((3, 4))
+    mut.frame_pose(scene.full_q(q0), *chain, body, X_BE, T, X)
+    steps = 10
+    p = X[:, 3] + np.outer(np.arange(1, steps + 1) / steps, [0.0, 0.0, -0.1])  # 10 cm down
+    R = np.repeat(X[None, :, :3], steps, axis=0)
+    args = (template, arm, *chain, body, X_BE, lower, upper)
+
+    def run(p_targets, jump):
+        return mut.line(q0, *args, R[: len(p_targets)], p_targets, jump, 30)
+
+    path, status = run(p, 0.2)
+    assert status == 0 and len(path) == steps + 1
+    for k in range(1, len(path)):
+        mut.frame_pose(scene.full_q(path[k]), *chain, body, X_BE, T, X)
+        assert np.linalg.norm(X[:, 3] - p[k - 1]) < 1e-4
+    assert np.max(np.abs(np.diff(path, axis=0))) <= 0.2
+    path, status = run(p, 1e-4)  # every step moves some joint more than that
+    assert status == 2 and len(path) == 1
+    far = p.copy()
+    far[5:] += [2.0, 0.0, 0.0]  # out of reach from the sixth pose on
+    path, status = run(far, 0.2)
+    assert status == 1 and len(path) == 6
