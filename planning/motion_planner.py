@@ -25,6 +25,7 @@ import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
 from planning.collision.checker import CheckerAdapter
+from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import announce_compile
 from planning.errors import ErrorCode, PlanningError
@@ -58,7 +59,13 @@ class MotionPlanner:
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
         announce_compile(
-            compiled_rrt.plan, compiled_rrt.fine_check, toppra.solve, cubic.evaluate, newton, line
+            compiled_rrt.plan,
+            compiled_rrt.fine_check,
+            classify_many,
+            toppra.solve,
+            cubic.evaluate,
+            newton,
+            line,
         )
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
         cubic.warm_up()

@@ -360,3 +360,25 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
             return True
     _verdicts(flags, verdict, lanes)
     return mode == FULL and _stop(flags, excused, mode, lanes)
+
+
+@njit(cache=True)
+def classify_many(qs, d):
+    """FREE, COLLIDING or UNKNOWN for each row of qs (N, 7), rad: ``classify_batch`` in FULL
+    mode, ``LANES`` rows per call (the scalar kernel's verdicts, about three times faster per
+    configuration); an int8 array (N,)."""
+    out = np.empty(len(qs), dtype=np.int8)
+    if len(qs) == 0:
+        return out
+    lanes = min(LANES, len(qs))
+    work = batch_work(d, lanes)
+    batch = np.empty((lanes, qs.shape[1]))
+    verdict = np.empty(lanes, dtype=np.int64)
+    excused = np.zeros(lanes, dtype=np.bool_)  # FULL mode reads none
+    for start in range(0, len(qs), lanes):
+        fill = min(lanes, len(qs) - start)
+        batch[:fill] = qs[start : start + fill]
+        classify_batch(batch, fill, d, work, FULL, excused, verdict)
+        for lane in range(fill):
+            out[start + lane] = verdict[lane]
+    return out

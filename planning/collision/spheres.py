@@ -32,6 +32,7 @@ import numpy as np
 from pydrake.multibody.tree import BodyIndex
 
 from planning.collision import sphere_kernel as _kernel
+from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
@@ -89,8 +90,9 @@ class SphereCollisionModel:
         except NotImplementedError:
             self.supported = False
         self.sync()
-        # Compiles or loads the kernel now, not mid-request.
+        # Compiles or loads the kernels now, not mid-request.
         self.classify(np.zeros((1, NUM_ARM_JOINTS)))
+        self.prefixes(np.zeros((1, NUM_ARM_JOINTS)), np.zeros((1, NUM_ARM_JOINTS)), 1.0, False)
 
     # ---------------------------------------------------------------------------- scene ----
     def sync(self) -> None:
@@ -331,11 +333,9 @@ class SphereCollisionModel:
         """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, 7), rad."""
         qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
         state = np.full(len(qs), UNKNOWN, dtype=np.int8)
-        if self.active:  # each configuration as a segment from itself to itself: one sample
-            _kernel.announce_compile()  # on stderr, once, when the kernel's first call compiles
-            first, _, unknown, _ = _kernel.prefixes(qs, qs, 1.0, False, self._data)
-            state[:] = np.where(first == 0, COLLIDING, FREE)
-            state[unknown] = UNKNOWN
+        if self.active:  # in batches of configurations (the scalar kernel's verdicts)
+            _kernel.announce_compile(classify_many)  # on stderr, once, when the first call compiles
+            state[:] = classify_many(qs, self._data)
         return state
 
     def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):

@@ -98,3 +98,20 @@ def test_first_block_stops_exactly_when_a_lane_blocks():
                 assert blocked[b] == expect
                 seen.add(expect)
     assert seen == {True, False}
+
+
+@pytest.mark.parametrize("count", [0, 1, 31, 33, 200])
+def test_classify_many_gives_each_configuration_the_scalar_verdict(count):
+    for _, scene in _scenes():
+        model = sphere_model(scene)
+        d = model.kernel_data()
+        qs = _samples(scene, seed=count)[:count].copy()
+        if count > 1:
+            qs[count // 2, 3] = np.nan  # a non-finite row among the others
+        got = mut.classify_many(qs, d)
+        assert got.dtype == np.int8 and got.shape == (count,)
+        if count:
+            np.testing.assert_array_equal(got, classify_each(qs, d))
+            np.testing.assert_array_equal(model.classify(qs), got)  # what the model answers
+        if count > 1:
+            assert got[count // 2] == UNKNOWN
