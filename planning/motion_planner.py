@@ -19,6 +19,7 @@ is only partly achievable is returned with ``success=False`` and the fraction ac
 """
 
 import dataclasses as dc
+import math
 import time
 
 import numpy as np
@@ -73,6 +74,7 @@ class MotionPlanner:
             sphere_model(scene, self._options.spheres.slack)
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
         self._search.warm_up()  # the compiled search is compiled or loaded here, once
+        self._limit_lists = [limit.tolist() for limit in self._search.limits]  # for _as_arm
         self._state.ik_solver()  # made now rather than in the first pose request
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
@@ -268,14 +270,15 @@ class MotionPlanner:
         return q
 
     def _as_arm(self, q, code: ErrorCode, what: str) -> np.ndarray:
-        q = np.asarray(q, dtype=float).reshape(-1)
-        if q.size not in (7, 9) or not np.all(np.isfinite(q)):
-            raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {q.tolist()}")
-        q = q[:7] if q.size == 9 else q
-        lower, upper = self._search.limits
-        if np.any(q < lower - 1e-6) or np.any(q > upper + 1e-6):
-            raise PlanningError(code, f"the {what} {np.round(q, 4).tolist()} is out of limits")
-        return np.clip(q, lower, upper)
+        # On plain floats: a few numpy calls on 7 values cost more than the sphere check.
+        values = np.asarray(q, dtype=float).reshape(-1).tolist()
+        if len(values) not in (7, 9) or not all(math.isfinite(v) for v in values):
+            raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {values}")
+        values = values[:7]
+        bounds = list(zip(values, *self._limit_lists, strict=True))
+        if any(v < lo - 1e-6 or v > hi + 1e-6 for v, lo, hi in bounds):
+            raise PlanningError(code, f"the {what} {np.round(values, 4).tolist()} is out of limits")
+        return np.array([min(max(v, lo), hi) for v, lo, hi in bounds])
 
     def _raise_if_goal_collides(self, X_WE, p_WE, R_WE, q_start) -> None:
         """Raises GOAL_IN_COLLISION when IK without collision avoidance finds only colliding

@@ -332,11 +332,10 @@ class SphereCollisionModel:
     def classify(self, qs) -> np.ndarray:
         """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, 7), rad."""
         qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
-        state = np.full(len(qs), UNKNOWN, dtype=np.int8)
         if self.active:  # in batches of configurations (the scalar kernel's verdicts)
             _kernel.announce_compile(classify_many)  # on stderr, once, when the first call compiles
-            state[:] = classify_many(qs, self._data)
-        return state
+            return classify_many(qs, self._data)
+        return np.full(len(qs), UNKNOWN, dtype=np.int8)
 
     def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
         """Classifies samples of segments from their starts up to their first blocking one;
