@@ -170,8 +170,9 @@ class RobotState:
 
     def ik_solver(self) -> IkSolver:
         """This state's IK solver, made on the first call (it allocates a collision-checker
-        context, a few milliseconds: ``MotionPlanner`` calls this when it is made, so that no
-        request pays for it)."""
+        context, a few milliseconds, and loads the compiled Newton steps, about 0.4 s, or
+        compiles them once per machine: ``MotionPlanner`` calls this when it is made, so that
+        no request pays for it)."""
         if self._ik is None:
             self._ik = IkSolver(self._scene)
         return self._ik
