@@ -4,10 +4,10 @@
 returns the spheres in each body's frame. Drake checks a ``Convex`` or ``Mesh`` as the convex
 hull of its vertices, so that hull (``Shape.GetConvexHull``) is what is covered; boxes are
 covered as polytopes, cylinders through a circumscribed prism, spheres are kept as they are.
-Covers are written to ``cache_dir()/spheres/<hash>.npz``, the hash taken over the covered
+Covers are written to ``cache_dir()/spheres/<hash>.npy``, the hash taken over the covered
 polytopes, their poses, the cover parameters and the cover code itself, so a changed mesh,
 option or algorithm regenerates them. ``held_cover`` covers an object the robot holds, in its own
-frame, and caches it the same way (``held-<hash>.npz``).
+frame, and caches it the same way (``held-<hash>.npy``).
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def robot_spheres(plant, inspector, bodies, slack: float) -> dict[int, SphereSet
             if v is not None:
                 digest.update(np.ascontiguousarray(v).tobytes())
             items.append((int(body), shape, X_BG))
-    path = cache_dir() / "spheres" / f"{digest.hexdigest()[:16]}.npz"
+    path = cache_dir() / "spheres" / f"{digest.hexdigest()[:16]}.npy"
     cached = _load(path)
     if cached is not None:
         return cached
@@ -133,7 +133,7 @@ def held_cover(shape, slack: float) -> SphereSet:
     digest.update(f"{type(shape).__name__} {radius}".encode())
     if v is not None:
         digest.update(np.ascontiguousarray(v).tobytes())
-    path = cache_dir() / "spheres" / f"held-{digest.hexdigest()[:16]}.npz"
+    path = cache_dir() / "spheres" / f"held-{digest.hexdigest()[:16]}.npy"
     cached = _load(path)
     if cached is not None:
         return cached[0]
@@ -146,23 +146,26 @@ def _load(path: Path) -> dict[int, SphereSet] | None:
     """The covers saved by ``_save`` (owner -> spheres), or None when there is no such file."""
     if not path.is_file():
         return None
-    data = np.load(path)
-    owner = data["body"]
+    rows = np.load(path)  # one array: ~0.1 ms, against ~1 ms for an .npz of four
+    owner = rows[:, 5].astype(int)
     return {
-        int(b): SphereSet(data["p"][owner == b], data["r"][owner == b], data["inner"][owner == b])
+        int(b): SphereSet(rows[owner == b, :3], rows[owner == b, 3], rows[owner == b, 4])
         for b in np.unique(owner)
     }
 
 
 def _save(path: Path, covers: dict[int, SphereSet]) -> None:
-    """Writes the covers (owner -> spheres) atomically (a temporary file, then a rename)."""
+    """Writes the covers (owner -> spheres) as one .npy array, a row per sphere (x, y, z,
+    radius, inner radius, owner), atomically (a temporary file, then a rename)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}.npz")
-    np.savez(
-        tmp,
-        body=np.concatenate([np.full(len(s.radius), b) for b, s in covers.items()]).astype(int),
-        p=np.vstack([s.p_BS for s in covers.values()]),
-        r=np.concatenate([s.radius for s in covers.values()]),
-        inner=np.concatenate([s.inner for s in covers.values()]),
+    tmp = path.with_name(f".{path.stem}.tmp{os.getpid()}.npy")
+    rows = np.column_stack(
+        [
+            np.vstack([s.p_BS for s in covers.values()]),
+            np.concatenate([s.radius for s in covers.values()]),
+            np.concatenate([s.inner for s in covers.values()]),
+            np.concatenate([np.full(len(s.radius), b) for b, s in covers.items()]),
+        ]
     )
+    np.save(tmp, rows)
     tmp.replace(path)

@@ -114,7 +114,7 @@ def test_robot_spheres_cover_every_collision_geometry_and_are_cached(scene, tmp_
             points = np.vstack([v] + [v[f].mean(axis=0, keepdims=True) for f in polygons])
             p_B = inspector.GetPoseInFrame(g).multiply(points.T).T
             assert covered(p_B, spheres).all(), plant.get_body(BodyIndex(body)).name()
-    assert len(list((tmp_path / "spheres").glob("*.npz"))) == 1
+    assert len(list((tmp_path / "spheres").glob("*.npy"))) == 1
     # Read back from the cache: nothing is covered again.
     monkeypatch.setattr(mut, "cover_shape", lambda *args, **kwargs: pytest.fail("covered again"))
     again = mut.robot_spheres(plant, inspector, bodies, 0.015)
@@ -129,7 +129,7 @@ def test_robot_spheres_cover_every_collision_geometry_and_are_cached(scene, tmp_
     np.testing.assert_array_equal(finger[bodies[2]].radius, dut[bodies[2]].radius)
     looser = mut.robot_spheres(plant, inspector, bodies[2:], 0.03)
     assert len(looser[bodies[2]].radius) <= len(dut[bodies[2]].radius)
-    assert len(list((tmp_path / "spheres").glob("*.npz"))) == 3
+    assert len(list((tmp_path / "spheres").glob("*.npy"))) == 3
 
 
 def test_held_covers_are_the_scaled_covers_and_are_cached(tmp_path, monkeypatch):
@@ -140,7 +140,7 @@ def test_held_covers_are_the_scaled_covers_and_are_cached(tmp_path, monkeypatch)
     for a, b in ((dut.p_BS, expected.p_BS), (dut.radius, expected.radius)):
         np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(dut.inner, expected.inner)
-    assert len(list((tmp_path / "spheres").glob("held-*.npz"))) == 1
+    assert len(list((tmp_path / "spheres").glob("held-*.npy"))) == 1
     monkeypatch.setattr(mut, "cover_shape", lambda *args, **kwargs: pytest.fail("covered again"))
     again = mut.held_cover(Box(0.04, 0.05, 0.12), 0.015)
     np.testing.assert_array_equal(again.radius, dut.radius)
@@ -150,4 +150,4 @@ def test_held_covers_are_the_scaled_covers_and_are_cached(tmp_path, monkeypatch)
     mut.held_cover(Box(0.04, 0.05, 0.13), 0.015)
     mut.held_cover(Cylinder(0.03, 0.1), 0.015)
     mut.held_cover(Box(0.04, 0.05, 0.12), 0.03)
-    assert len(list((tmp_path / "spheres").glob("held-*.npz"))) == 4
+    assert len(list((tmp_path / "spheres").glob("held-*.npy"))) == 4
