@@ -139,18 +139,26 @@ class PoseNewton:
 
     def __init__(self, plant, frame, full, arm, lower, upper):
         kinematics = BatchedKinematics(plant, [frame.body().index()])
-        self._chain = kinematics.arrays()
-        self._body = int(kinematics.out[0])
-        self._X_BE = np.ascontiguousarray(frame.GetFixedPoseInBodyFrame().GetAsMatrix34())
-        self._full, self._arm = full, np.asarray(arm, dtype=np.int64)
-        self._lower = np.ascontiguousarray(lower, dtype=float)
-        self._upper = np.ascontiguousarray(upper, dtype=float)
+        self._full = full
+        # pose_kernel's frame data but the template (the other joints, read at each call).
+        self._fixed = (
+            np.asarray(arm, dtype=np.int64),
+            *kinematics.arrays(),
+            int(kinematics.out[0]),
+            np.ascontiguousarray(frame.GetFixedPoseInBodyFrame().GetAsMatrix34()),
+            np.ascontiguousarray(lower, dtype=float),
+            np.ascontiguousarray(upper, dtype=float),
+        )
+
+    def _frame(self, q) -> tuple:
+        """pose_kernel's frame data with the plant positions at the arm joints q."""
+        return (np.ascontiguousarray(self._full(q), dtype=float), *self._fixed)
 
     def pose(self, q) -> RigidTransform:
         """X_WE at the arm joints q (7,)."""
-        full = np.ascontiguousarray(self._full(np.asarray(q, dtype=float)), dtype=float)
-        T, X = np.empty((len(self._chain[0]), 3, 4)), np.empty((3, 4))
-        frame_pose(full, *self._chain, self._body, self._X_BE, T, X)
+        full, _, parent, kind, q_index, terms, body, X_BE, _, _ = self._frame(q)
+        T, X = np.empty((len(parent), 3, 4)), np.empty((3, 4))
+        frame_pose(full, parent, kind, q_index, terms, body, X_BE, T, X)
         return RigidTransform(X)
 
     def line(self, q_start, R_targets, p_targets, jump_threshold: float):
@@ -159,13 +167,7 @@ class PoseNewton:
         q_start = np.array(q_start, dtype=float).reshape(-1)
         return line(
             q_start,
-            np.ascontiguousarray(self._full(q_start), dtype=float),
-            self._arm,
-            *self._chain,
-            self._body,
-            self._X_BE,
-            self._lower,
-            self._upper,
+            self._frame(q_start),
             np.ascontiguousarray(R_targets, dtype=float),
             np.ascontiguousarray(p_targets, dtype=float),
             float(jump_threshold),
@@ -179,16 +181,9 @@ class PoseNewton:
         Jacobian's null space, and the steps go on until that move is below 1e-4 rad: the
         joints nearest to ``rest`` (locally) that place the frame."""
         q0 = np.array(q0, dtype=float).reshape(-1)
-        template = np.ascontiguousarray(self._full(q0), dtype=float)
         found, q = newton(
             q0,
-            template,
-            self._arm,
-            *self._chain,
-            self._body,
-            self._X_BE,
-            self._lower,
-            self._upper,
+            self._frame(q0),
             _NO_ROTATION if R_T is None else np.ascontiguousarray(R_T, dtype=float),
             _NO_POSITION if p_T is None else np.ascontiguousarray(p_T, dtype=float),
             R_T is not None,

@@ -92,6 +92,7 @@ def frame_jacobian(full, parent, kind, q_index, terms, T, X, arm, J):
     D = np.empty((3, 4))
     X_CE = np.empty((3, 4))
     dX = np.empty((3, 4))
+    rotated = np.empty((3, 4))
     for s in range(len(parent)):
         if kind[s] == 0:
             continue
@@ -101,13 +102,13 @@ def frame_jacobian(full, parent, kind, q_index, terms, T, X, arm, J):
                 column = k
         if column < 0:
             continue
-        q = full[q_index[s]]
+        # dX_PC/dq: cos q B - sin q C (revolute), B (prismatic: C is zero).
+        c, n = 1.0, 0.0
+        if kind[s] == 1:
+            c, n = np.cos(full[q_index[s]]), -np.sin(full[q_index[s]])
         for i in range(3):
             for j in range(4):
-                if kind[s] == 1:
-                    D[i, j] = np.cos(q) * terms[s, 1, i, j] - np.sin(q) * terms[s, 2, i, j]
-                else:
-                    D[i, j] = terms[s, 1, i, j]
+                D[i, j] = c * terms[s, 1, i, j] + n * terms[s, 2, i, j]
         # X_CE = X_WC^-1 X_WE: R_WC^T (X_WE - p_WC) column by column.
         for i in range(3):
             for j in range(4):
@@ -124,7 +125,6 @@ def frame_jacobian(full, parent, kind, q_index, terms, T, X, arm, J):
                     x += D[i, 3]
                 dX[i, j] = x
         if p >= 0:
-            rotated = np.empty((3, 4))
             for i in range(3):
                 for j in range(4):
                     rotated[i, j] = (
@@ -167,35 +167,22 @@ def _solve_spd(A, B):
 
 
 @njit(cache=True)
-def newton(
-    q0,
-    template,
-    arm,
-    parent,
-    kind,
-    q_index,
-    terms,
-    body,
-    X_BE,
-    lower,
-    upper,
-    R_T,
-    p_T,
-    use_rotation,
-    use_position,
-    iterations,
-    rest,
-    use_rest,
-):
+def newton(q0, frame, R_T, p_T, use_rotation, use_position, iterations, rest, use_rest):
     """Damped Newton steps (dq = J^T (J J^T + lambda^2 I)^-1 e, the error cut to ``_MAX_ERROR``
     m and ``_MAX_TURN`` rad, the joints clipped to [lower, upper]) placing frame E at the
     orientation R_T (3, 3) and/or position p_T (3,) (``use_rotation``, ``use_position``),
     from q0 (7,). With ``use_rest``, each step also moves the joints towards ``rest`` in the
     Jacobian's null space, until that move is below ``_REST_TOLERANCE``.
 
+    ``frame`` is E's data: (template, arm, parent, kind, q_index, terms, body, X_BE, lower,
+    upper): the plant positions of the joints other than the arm's (nq,), the arm's indices
+    among them (7,), the chain of E's body (``BatchedKinematics.arrays``), the step of that
+    body (-1: the world), E's pose on it (3, 4) and the arm's limits (7,), rad.
+
     Returns:
         (found, q): the joints within the tolerances, or found False after ``iterations``.
     """
+    template, arm, parent, kind, q_index, terms, body, X_BE, lower, upper = frame
     full = template.copy()
     T = np.empty((len(parent), 3, 4))
     X = np.empty((3, 4))
@@ -275,32 +262,17 @@ def newton(
 
 
 @njit(cache=True)
-def line(
-    q_start,
-    template,
-    arm,
-    parent,
-    kind,
-    q_index,
-    terms,
-    body,
-    X_BE,
-    lower,
-    upper,
-    R_targets,
-    p_targets,
-    jump_threshold,
-    iterations,
-):
-    """``newton`` from each pose of a line (R_targets (K, 3, 3), p_targets (K, 3)) to the next,
-    from q_start, each solve starting from the last joint change repeated (along a straight
-    line the next joints are that close to second order) and accepted when no joint moves
-    more than ``jump_threshold`` rad.
+def line(q_start, frame, R_targets, p_targets, jump_threshold, iterations):
+    """``newton`` (``frame`` as there) from each pose of a line (R_targets (K, 3, 3), p_targets
+    (K, 3)) to the next, from q_start, each solve starting from the last joint change repeated
+    (along a straight line the next joints are that close to second order) and accepted when
+    no joint moves more than ``jump_threshold`` rad.
 
     Returns:
         (path (M, 7): q_start and the joints of the poses reached in order, status: 0 every
         pose reached, 1 a solve failed, 2 a joint jumped).
     """
+    lower, upper = frame[8], frame[9]
     dims = len(q_start)
     path = np.empty((len(p_targets) + 1, dims))
     path[0] = q_start
@@ -311,9 +283,8 @@ def line(
             if k > 0:
                 guess[j] = min(max(2.0 * path[k, j] - path[k - 1, j], lower[j]), upper[j])
         found, q = newton(
-            guess, template, arm, parent, kind, q_index, terms, body, X_BE, lower, upper,
-            R_targets[k], p_targets[k], True, True, iterations, guess, False,
-        )  # fmt: skip
+            guess, frame, R_targets[k], p_targets[k], True, True, iterations, guess, False
+        )
         if not found:
             return path[: k + 1].copy(), 1
         jump = 0.0
@@ -327,21 +298,15 @@ def line(
 
 def warm_up() -> None:
     """Compiles (first run on a machine) or loads ``newton`` and ``line`` now rather than in a
-    request: a
-    two-joint chain (one revolute step, one weld), position and orientation, with a rest."""
+    request: a two-step chain (one revolute joint, one weld), position and orientation, with
+    a rest."""
     terms = np.zeros((2, 3, 3, 4))
     terms[:, 0, :, :3] = np.eye(3)
     q = np.zeros(1)
-    newton(
-        q, q, np.zeros(1, dtype=np.int64), np.array([-1, 0]), np.array([1, 0]),
-        np.zeros(2, dtype=np.int64), terms, 1, np.eye(4)[:3], q - 1.0, q + 1.0,
-        np.eye(3), np.zeros(3), True, True, 1, q, True,
-    )  # fmt: skip
-    line(
-        q, q, np.zeros(1, dtype=np.int64), np.array([-1, 0]), np.array([1, 0]),
-        np.zeros(2, dtype=np.int64), terms, 1, np.eye(4)[:3], q - 1.0, q + 1.0,
-        np.eye(3)[None], np.zeros((1, 3)), 0.2, 1,
-    )  # fmt: skip
+    chain = (np.array([-1, 0]), np.array([1, 0]), np.zeros(2, dtype=np.int64), terms)
+    frame = (q, np.zeros(1, dtype=np.int64), *chain, 1, np.eye(4)[:3], q - 1.0, q + 1.0)
+    newton(q, frame, np.eye(3), np.zeros(3), True, True, 1, q, True)
+    line(q, frame, np.eye(3)[None], np.zeros((1, 3)), 0.2, 1)
 
 
 # Numba keys a cached function on its own file alone; these compile the kernel's code in.

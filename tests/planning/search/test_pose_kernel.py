@@ -79,7 +79,7 @@ def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
     frame, chain, body, X_BE, arm = chain_of(scene, scene.config.model.ee_frame)
     adapter = CheckerAdapter(scene)
     lower, upper = adapter.lower, adapter.upper
-    template = scene.full_q(np.zeros(7))
+    data = (scene.full_q(np.zeros(7)), arm, *chain, body, X_BE, lower, upper)
     rng = np.random.default_rng(4)
     T, X = np.empty((len(chain[0]), 3, 4)), np.empty((3, 4))
     reached = 0
@@ -88,10 +88,7 @@ def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
         mut.frame_pose(scene.full_q(q_goal), *chain, body, X_BE, T, X)
         R_T, p_T = X[:, :3].copy(), X[:, 3].copy()
         q0 = np.clip(q_goal + rng.normal(scale=0.2, size=7), lower, upper)
-        found, q = mut.newton(
-            q0, template, arm, *chain, body, X_BE, lower, upper, R_T, p_T, True, True, 100, q0,
-            False,
-        )  # fmt: skip
+        found, q = mut.newton(q0, data, R_T, p_T, True, True, 100, q0, False)
         if found:
             reached += 1
             pose = frame.CalcPoseInWorld(scene.plant_context(q))
@@ -101,10 +98,7 @@ def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
     assert reached >= 18  # from 0.2 rad away, nearly always
     q0 = scene.model.named_configurations["ready"]
     for p_T in (np.array([3.0, 0.0, 0.5]), np.array([np.nan, 0.0, 0.5])):  # out of reach; NaN
-        found, _ = mut.newton(
-            q0, template, arm, *chain, body, X_BE, lower, upper, np.eye(3), p_T, False, True, 50,
-            q0, False,
-        )  # fmt: skip
+        found, _ = mut.newton(q0, data, np.eye(3), p_T, False, True, 50, q0, False)
         assert not found
 
 
@@ -112,17 +106,16 @@ def test_a_line_of_poses_is_solved_step_by_step_and_stops_at_a_jump_or_a_miss(sc
     frame, chain, body, X_BE, arm = chain_of(scene, scene.config.model.ee_frame)
     adapter = CheckerAdapter(scene)
     lower, upper = adapter.lower, adapter.upper
-    template = scene.full_q(np.zeros(7))
     q0 = scene.model.named_configurations["ready"][:7].astype(float)
     T, X = np.empty((len(chain[0]), 3, 4)), np.empty((3, 4))
     mut.frame_pose(scene.full_q(q0), *chain, body, X_BE, T, X)
     steps = 10
     p = X[:, 3] + np.outer(np.arange(1, steps + 1) / steps, [0.0, 0.0, -0.1])  # 10 cm down
     R = np.repeat(X[None, :, :3], steps, axis=0)
-    args = (template, arm, *chain, body, X_BE, lower, upper)
+    data = (scene.full_q(np.zeros(7)), arm, *chain, body, X_BE, lower, upper)
 
     def run(p_targets, jump):
-        return mut.line(q0, *args, R[: len(p_targets)], p_targets, jump, 30)
+        return mut.line(q0, data, R[: len(p_targets)], p_targets, jump, 30)
 
     path, status = run(p, 0.2)
     assert status == 0 and len(path) == steps + 1
