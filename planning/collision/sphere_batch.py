@@ -21,10 +21,15 @@ faster than one sample at a time: the edges are short, and a blocked one shows i
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 from numba import njit
 
-from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN
+from planning.collision import sphere_kernel, trig
+from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, refresh_cache
+from planning.collision.trig import sincos_lanes
 
 # Configurations per batch, at most. The loops over lanes run to a count known only at run time,
 # which LLVM vectorises (with a fixed count of 8 it unrolled them into scalar code instead).
@@ -54,7 +59,7 @@ def batch_work(d, lanes=LANES):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _points(T, s, p_B, k, out, row, lanes):
     """out[row] = X_W,s p_B[k] for every lane (same arithmetic as ``sphere_kernel._point``)."""
     x = p_B[k, 0]
@@ -70,7 +75,7 @@ def _points(T, s, p_B, k, out, row, lanes):
             o[lane] = r0[lane] * x + r1[lane] * y + r2[lane] * z + r3[lane]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _min_distance2(p, obj, best, lanes):
     """best = min(best, squared distance from each lane's point p (3, lanes) to the object of
     row ``obj``): ``sphere_kernel._distance2``'s arithmetic (adding a zero term is exact)."""
@@ -118,7 +123,7 @@ def _min_distance2(p, obj, best, lanes):
             best[lane] = min(best[lane], gap * gap)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _stop(flags, excused, mode, lanes):
     """True when the batch can stop: in FULL mode every lane is COLLIDING; in FIRST_BLOCK mode
     some lane is COLLIDING, or UNKNOWN without being ``excused``."""
@@ -134,7 +139,7 @@ def _stop(flags, excused, mode, lanes):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _verdicts(flags, verdict, lanes):
     """verdict = UNKNOWN for non-finite lanes, else COLLIDING, UNKNOWN or FREE by the flags."""
     colliding, unknown, bad = flags[0], flags[1], flags[2]
@@ -149,7 +154,7 @@ def _verdicts(flags, verdict, lanes):
             verdict[lane] = FREE
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def classify_batch(qs, count, d, work, mode, excused, verdict):
     """Classifies the arm configurations ``qs[:count]`` (rows, rad; 1 <= count <= the lanes
     of ``work``).
@@ -198,9 +203,7 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         kind = d.kind[s]
         qi = d.q_index[s]
         if kind == 1:
-            for lane in range(lanes):
-                a[lane] = np.sin(fulls[qi, lane])
-                b[lane] = np.cos(fulls[qi, lane])
+            sincos_lanes(fulls[qi], a, b, lanes)
         elif kind == 2:
             for lane in range(lanes):
                 a[lane] = fulls[qi, lane]
@@ -219,7 +222,10 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         p = d.parent[s]
         if p < 0:
             for e in range(12):
-                T[s, e, :lanes] = m[e, :lanes]
+                out = T[s, e]
+                me = m[e]
+                for lane in range(lanes):
+                    out[lane] = me[lane]
             continue
         for i in range(3):
             r0 = T[p, 4 * i]
@@ -382,3 +388,11 @@ def classify_many(qs, d):
         for lane in range(fill):
             out[start + lane] = verdict[lane]
     return out
+
+
+# Numba keys a cached function on its own file alone; these compile ``trig``'s code into theirs.
+refresh_cache(
+    sys.modules[__name__],
+    [Path(__file__), Path(sphere_kernel.__file__), Path(trig.__file__)],
+    Path(classify_many._cache._cache_path),
+)

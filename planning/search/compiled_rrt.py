@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from planning.collision import sphere_batch, sphere_kernel
+from planning.collision import sphere_batch, sphere_kernel, trig
 from planning.collision.sphere_batch import FULL, classify_batch
 from planning.collision.sphere_kernel import (
     COLLIDING,
@@ -59,7 +59,7 @@ def seed_state(seed: int) -> np.ndarray:
     return np.array([z or 1], dtype=np.uint64)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _uniform(state):
     """A uniform double in [0, 1) from xorshift64*; advances ``state``."""
     x = state[0]
@@ -70,7 +70,7 @@ def _uniform(state):
     return float((x * np.uint64(2685821657736338717)) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _nearest(cols, size, q, work):
     """(index, distance) of the node nearest to q among the first ``size`` of a tree stored
     by coordinates, ``cols`` (7, capacity): a linear scan, one coordinate at a time over all
@@ -131,7 +131,7 @@ def _branch(nodes, parent, index):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _free(q_a, q_b, step, d, scratch, end_known=False):
     """True when every sample t = i/n, i = 1..n of the segment (n = ceil(length / step)) is
     free, UNKNOWN ones near an anchor included (``edge_prefix``). The end goes first (unless
@@ -495,6 +495,11 @@ def warm_up(data, lower, upper) -> None:
 # Numba keys a cached function on its own file alone; these compile the kernels' code into theirs.
 refresh_cache(
     sys.modules[__name__],
-    [Path(__file__), Path(sphere_kernel.__file__), Path(sphere_batch.__file__)],
+    [
+        Path(__file__),
+        Path(sphere_kernel.__file__),
+        Path(sphere_batch.__file__),
+        Path(trig.__file__),
+    ],
     Path(plan._cache._cache_path),
 )

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from planning.collision import sphere_kernel
+from planning.collision import sphere_kernel, trig
 from planning.collision.sphere_kernel import _pose_chain, refresh_cache
 
 _MAX_ERROR = 0.05  # m: a larger position error is cut to this in one Newton step
@@ -312,6 +312,6 @@ def warm_up() -> None:
 # Numba keys a cached function on its own file alone; these compile the kernel's code in.
 refresh_cache(
     sys.modules[__name__],
-    [Path(__file__), Path(sphere_kernel.__file__)],
+    [Path(__file__), Path(sphere_kernel.__file__), Path(trig.__file__)],
     Path(newton._cache._cache_path),
 )
