@@ -218,7 +218,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
     for k in range(len(q)):
         if not np.isfinite(q[k]):
             return UNKNOWN, 0.0  # never proven free: comparisons with NaN are all false
-    full, T, centres, seen, bodies, groups, near, stamp, before, far = work
+    full, T, centres, seen, bodies, groups, near, stamp, before, far, boxes, gaps = work
     stamp[0] += 1
     now = stamp[0]
     for k in range(len(d.arm)):
@@ -241,21 +241,23 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
         w = bodies[b, 2] - before[b, 2]
         moved2 = u * u + v * v + w * w
         if not (far[b] > 0.0 and moved2 < far[b] * far[b]):
-            count = 0
-            far2 = np.inf
             x = bodies[b, 0]
             y = bodies[b, 1]
             z = bodies[b, 2]
+            for o in range(n_obj):  # the boxes' corners by coordinate: a loop that vectorises
+                gx = max(boxes[0, o] - x, x - boxes[3, o], 0.0)
+                gy = max(boxes[1, o] - y, y - boxes[4, o], 0.0)
+                gz = max(boxes[2, o] - z, z - boxes[5, o], 0.0)
+                gaps[o] = gx * gx + gy * gy + gz * gz
+            count = 0
+            far2 = np.inf
+            reach2 = d.body_reach[b] * d.body_reach[b]
             for o in range(n_obj):
-                gx = max(objects[o, 16] - x, x - objects[o, 19], 0.0)
-                gy = max(objects[o, 17] - y, y - objects[o, 20], 0.0)
-                gz = max(objects[o, 18] - z, z - objects[o, 21], 0.0)
-                gap2 = gx * gx + gy * gy + gz * gz
-                if gap2 < d.body_reach[b] * d.body_reach[b]:
+                if gaps[o] < reach2:
                     near[b, count] = o
                     count += 1
                 else:
-                    far2 = min(far2, gap2)
+                    far2 = min(far2, gaps[o])
             near[b, n_obj] = count
             far[b] = np.sqrt(far2) - d.body_reach[b]  # inf when every object is near
             before[b, 0] = bodies[b, 0]
@@ -356,6 +358,8 @@ def _work(d):
         np.zeros(1, dtype=np.int64),
         np.zeros((len(d.body_step), 3)),  # the bodies' centres when their lists were made
         np.full(len(d.body_step), -1.0),  # their margins to the far objects then (< 0: none)
+        d.objects[:, OBJ_LOWER : OBJ_UPPER + 3].T.copy(),  # the objects' boxes' corners, (6, O)
+        np.empty(n_obj),  # squared distances from a body's centre to them
     )
 
 
