@@ -23,7 +23,9 @@ scratch tuple was counted in and out around the loops, and the counting cost a f
 (search on MBM: 23 % less time, the same checks and paths; measured in paired runs).
 ``_classify_one`` is inlined where it is called (numba's ``inline="always"``): a call passed its
 forty-odd arrays field by field, 12 % of the search's time (paired runs; the first compile took
-no longer, measured). The sine and cosine come from ``planning.collision.trig``.
+103 s against 120 s without it, measured in turn: no longer within the VM's noise). Inlining the
+small helpers as well gained 2-3 % more for a first compile of 162 s: not done. The sine and
+cosine come from ``planning.collision.trig``.
 
 Compiled once per machine (``cache=True`` keeps the machine code beside this file, or in
 numba's cache folder when that is read-only): the first call in a fresh install takes about
