@@ -3,7 +3,7 @@
 ``SphereCollisionModel`` (``planning.collision.spheres``) packs the robot's kinematic tree, its
 spheres, their culling groups and the world's boxes, cylinders and spheres into a ``KernelData`` of
 flat arrays; ``prefixes`` checks samples along many segments, one configuration at a time in
-compiled loops: 2 to 4 us per configuration and ~15 us per call (unpacking the arrays), where
+compiled loops: 1 to 2 us per configuration and ~15 us per call (unpacking the arrays), where
 the numpy version of the same passes cost ~25 us per configuration and ~0.5 ms per call
 (measured on this project's 2-core VM). Culling goes from coarse to fine: a sphere around
 each body against axis-aligned boxes around the objects, then a sphere around each group of
