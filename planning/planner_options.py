@@ -58,6 +58,19 @@ class RrtConnectOptions:
     # measured 1.0 with batch 16 better than 0.5 with batch 8.)
     step: float = 0.5
     goal_bias: float = 0.05  # probability of sampling the other tree's root
+    # Extend the smaller tree (the start tree on a tie) rather than each in turn, as VAMP's
+    # RRT-Connect does (here and in planning.search.rrt). Measured on all of MBM (compiled
+    # search, in turn with the trees taking turns): 55 % fewer checks in all, p95 of the
+    # compiled search 23.5 -> 10.8 ms.
+    balance: bool = True
+    # rad; dynamic-domain sampling (Yershova et al., ICRA 2005): after a failed extension a
+    # node only grows towards targets within this distance (0: off), shrinking by 1e-4 per
+    # further failure down to dynamic_domain_min. Compiled search only. Measured on all of MBM
+    # with balance (in parallel runs): 4.0 (VAMP's value) gave a median per problem 7 % lower
+    # and paths 4.86 against 4.89 rad, but 90 against 69 paths needing repairs after the fine
+    # check and the same total time; off by default.
+    dynamic_domain: float = 0.0
+    dynamic_domain_min: float = 1.0
     batch: int = 16  # RRT-Connect extensions per collision query (1: one at a time); see step
     # s, RRT-Connect restarts with new trees after this (run times are heavy-tailed); shorter
     # restarts (1, 2.5 s) measured no better on hard MBM problems.
@@ -67,6 +80,19 @@ class RrtConnectOptions:
         """Raises ValueError naming the first field out of range."""
         _positive(self.step, f"{prefix}.step")
         _fraction(self.goal_bias, f"{prefix}.goal_bias", zero_ok=True)
+        _flag(self.balance, f"{prefix}.balance")
+        _require(
+            self.dynamic_domain >= 0.0 and math.isfinite(self.dynamic_domain),
+            f"{prefix}.dynamic_domain",
+            ">= 0 (0: off)",
+            self.dynamic_domain,
+        )
+        _require(
+            self.dynamic_domain_min > 0.0 and math.isfinite(self.dynamic_domain_min),
+            f"{prefix}.dynamic_domain_min",
+            "> 0 and finite",
+            self.dynamic_domain_min,
+        )
         _count(self.batch, f"{prefix}.batch", least=1)
         _positive(self.restart_interval, f"{prefix}.restart_interval")
 

@@ -170,6 +170,9 @@ class JointPathSearch:
                 opts.shortcut.iterations,
                 rng,
                 anchor_radius,
+                opts.rrt.balance,
+                opts.rrt.dynamic_domain or np.inf,
+                opts.rrt.dynamic_domain_min,
             )
 
         spheres, fine = opts.spheres, opts.validation.resolution
@@ -232,6 +235,7 @@ class JointPathSearch:
             deadline=deadline,
             rng=rng,
             batch=opts.batch,
+            balance=opts.balance,
         )
 
     def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:

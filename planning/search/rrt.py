@@ -67,6 +67,7 @@ def rrt_connect(
     rng: np.random.Generator,
     batch: int = 1,
     max_rounds: int = 100_000,
+    balance: bool = False,
 ) -> np.ndarray | None:
     """Plans a collision-free path with RRT-Connect; both ends must be collision-free.
 
@@ -79,6 +80,8 @@ def rrt_connect(
         rng: the random generator.
         batch: extensions per round (1: the classic algorithm, one extension at a time).
         max_rounds: rounds before giving up.
+        balance: extend the smaller tree each round (the start tree on a tie), rather than
+            each in turn.
 
     Returns:
         (N, 7) waypoints from q_start to q_goal, or None when none was found in time.
@@ -87,7 +90,8 @@ def rrt_connect(
     for round_ in range(max_rounds):
         if time.perf_counter() > deadline:
             return None
-        a, b = trees[round_ % 2], trees[(round_ + 1) % 2]
+        k = int(trees[0].size > trees[1].size) if balance else round_ % 2
+        a, b = trees[k], trees[1 - k]
         targets = rng.uniform(adapter.lower, adapter.upper, (batch, len(adapter.lower)))
         targets[rng.random(batch) < goal_bias] = b.q[0]
         new = _extend_all(adapter, a, targets, step)
@@ -96,8 +100,8 @@ def rrt_connect(
         found = _connect_all(adapter, b, a.q[new], step)
         if found is None:
             continue
-        k, reached = found
-        return joined_path(a, new[k], b, reached, reverse=round_ % 2 == 1)
+        i, reached = found
+        return joined_path(a, new[i], b, reached, reverse=k == 1)
     return None
 
 

@@ -22,7 +22,15 @@ def test_defaults_are_the_documented_values():
     """The values config/planner.yaml held before the dataclass defaults replaced it."""
     o = mut.MotionPlannerOptions()
     assert (o.timeout, o.seed) == (5.0, 0)
-    assert o.rrt == mut.RrtConnectOptions(step=0.5, goal_bias=0.05, batch=16, restart_interval=10.0)
+    assert o.rrt == mut.RrtConnectOptions(
+        step=0.5,
+        goal_bias=0.05,
+        balance=True,
+        dynamic_domain=0.0,
+        dynamic_domain_min=1.0,
+        batch=16,
+        restart_interval=10.0,
+    )
     assert o.shortcut == mut.ShortcutOptions(iterations=50, time_fraction=0.2)
     assert o.validation == mut.ValidationOptions(
         resolution=0.01, max_repairs=3, repair_timeout=0.5, repair_step=0.25
@@ -105,6 +113,12 @@ def test_load_needs_a_filename():
 BAD_VALUES = [
     ("rrt", "step", 0.0),
     ("rrt", "goal_bias", 1.5),
+    ("rrt", "balance", 1),
+    ("rrt", "dynamic_domain", -1.0),
+    ("rrt", "dynamic_domain", float("nan")),
+    ("rrt", "dynamic_domain", float("inf")),
+    ("rrt", "dynamic_domain_min", 0.0),
+    ("rrt", "dynamic_domain_min", float("inf")),
     ("rrt", "batch", 0),
     ("rrt", "restart_interval", -1.0),
     ("shortcut", "iterations", -1),

@@ -29,7 +29,19 @@ def limits(scene):
     return adapter.lower, adapter.upper
 
 
-def search(data, limits, q_a, q_b, seed=0, max_checks=50_000, iterations=20, anchor_radius=0.0):
+def search(
+    data,
+    limits,
+    q_a,
+    q_b,
+    seed=0,
+    max_checks=50_000,
+    iterations=20,
+    anchor_radius=0.0,
+    balance=True,
+    domain=np.inf,
+    domain_min=1.0,
+):
     return mut.plan(
         q_a,
         q_b,
@@ -42,6 +54,9 @@ def search(data, limits, q_a, q_b, seed=0, max_checks=50_000, iterations=20, anc
         iterations,
         mut.seed_state(seed),
         anchor_radius,
+        balance,
+        domain,
+        domain_min,
     )
 
 
@@ -52,10 +67,17 @@ def test_a_free_straight_line_is_the_path(data, limits, ends):
     np.testing.assert_array_equal(path, [q_a, q_a - 0.2 * E[0]])
 
 
-def test_around_an_obstacle_every_segment_is_free_for_drake(scene, data, limits, ends):
+@pytest.mark.parametrize(
+    "balance, domain",
+    [(True, np.inf), (False, np.inf), (True, 1.0)],
+    ids=["balanced", "in-turn", "dynamic-domain"],
+)
+def test_around_an_obstacle_every_segment_is_free_for_drake(
+    scene, data, limits, ends, balance, domain
+):
     q_a, q_b = ends
     assert not CheckerAdapter(scene).edge_free(q_a, q_b)  # the box is in the way
-    status, path, how, _ = search(data, limits, q_a, q_b)
+    status, path, how, _ = search(data, limits, q_a, q_b, balance=balance, domain=domain)
     assert status == mut.FOUND and how == 1
     np.testing.assert_array_equal(path[0], q_a)
     np.testing.assert_array_equal(path[-1], q_b)
@@ -73,10 +95,27 @@ def test_one_seed_gives_one_path(data, limits, ends):
     assert not np.array_equal(search(data, limits, *ends, seed=4)[1], first)
 
 
+def test_balancing_changes_the_search(data, limits, ends):
+    balanced = search(data, limits, *ends, seed=3)
+    in_turn = search(data, limits, *ends, seed=3, balance=False)
+    assert balanced[0] == in_turn[0] == mut.FOUND
+    assert balanced[3] != in_turn[3] or not np.array_equal(balanced[1], in_turn[1])
+
+
 def test_the_check_budget_ends_the_search(data, limits, ends):
     status, path, _, checks = search(data, limits, *ends, max_checks=5)
     assert status == mut.GAVE_UP and len(path) == 0
     assert 5 <= checks < 100  # the round that crossed the budget finishes
+
+
+def test_rejected_targets_count_against_the_budget(data, limits, ends):
+    # A domain of 1 mrad rejects almost every target once an extension has failed: the search
+    # still ends, by the budget, having classified fewer configurations than it allows.
+    status, path, _, checks = search(
+        data, limits, *ends, max_checks=300, domain=1e-3, domain_min=1e-3
+    )
+    assert status == mut.GAVE_UP and len(path) == 0
+    assert checks < 300
 
 
 def test_the_fine_check_names_the_colliding_segment(scene, data, ends):

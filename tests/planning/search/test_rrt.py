@@ -2,7 +2,8 @@
 joins two trees' branches at their meeting point; rrt_connect around a wall returns a path from
 the start to the goal whose segments are at most a step long and collision-free at the fine
 resolution (on sphere-first checks, as the planner searches, and on Drake's checker alone), one
-extension per query (the classic algorithm) or a batch of them, the same path for the same seed,
+extension per query (the classic algorithm) or a batch of them, the trees in turn or the smaller
+first (balanced), the same path for the same seed,
 and None when out of time or rounds."""
 
 import time
@@ -19,7 +20,7 @@ E = np.eye(7)
 FINE = 0.01  # rad
 
 
-def plan(scene, ends, seed, step=0.5, goal_bias=0.05, adapter=None, batch=1):
+def plan(scene, ends, seed, step=0.5, goal_bias=0.05, adapter=None, batch=1, balance=False):
     """RRT-Connect with edges checked every FINE rad (sphere models first, then Drake)."""
     return mut.rrt_connect(
         adapter or SphereCheckerAdapter(scene, FINE),
@@ -30,6 +31,7 @@ def plan(scene, ends, seed, step=0.5, goal_bias=0.05, adapter=None, batch=1):
         rng=np.random.default_rng(seed),
         max_rounds=5000,
         batch=batch,
+        balance=balance,
     )
 
 
@@ -68,12 +70,12 @@ def test_joined_path_meets_once_and_is_reversed_for_the_goal_tree():
     np.testing.assert_array_equal(back, path[::-1])
 
 
-@pytest.mark.parametrize("batch", [1, 16])
-def test_a_path_around_the_wall_from_start_to_goal(scene, ends, batch):
+@pytest.mark.parametrize("batch, balance", [(1, False), (16, False), (1, True), (16, True)])
+def test_a_path_around_the_wall_from_start_to_goal(scene, ends, batch, balance):
     start, goal = ends
     assert not scene.is_edge_collision_free(start, goal)
     step = 0.5
-    path = plan(scene, ends, seed=0, step=step, batch=batch)
+    path = plan(scene, ends, seed=0, step=step, batch=batch, balance=balance)
     assert path is not None and path.shape[1] == 7 and len(path) >= 3
     np.testing.assert_array_equal(path[0], start)
     np.testing.assert_array_equal(path[-1], goal)
