@@ -34,7 +34,7 @@ from pydrake.multibody.tree import BodyIndex
 from planning.collision import sphere_kernel as _kernel
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
-from planning.collision.sphere_fk import BatchedKinematics
+from planning.collision.sphere_fk import BatchedKinematics, fold_fixed_steps, fold_points
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
 from planning.collision.sphere_robot import held_cover, robot_spheres
 from planning.model.layout import NUM_ARM_JOINTS
@@ -43,6 +43,8 @@ from planning.model.panda import ATTACHMENT_BODY
 __all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
 _MARGIN = 1e-5  # m, added on the safe side of every comparison (covers rounding)
 _GROUP = 4  # spheres per culling group
+# (step, point) arrays of the kernel data whose points are fixed on kinematic steps.
+_FOLDED = (("sphere_step", "p_BS"), ("group_step", "p_BG"), ("body_step", "p_BL"))
 # KernelData's square roots of squared thresholds, by name (for the certificates' clearances).
 _ROOTS = {
     "env_reach": "env_reach2",
@@ -123,16 +125,22 @@ class SphereCollisionModel:
                 self._held_signature = signature[1]
             template = np.ascontiguousarray(self._template, dtype=float)
             arm = np.asarray(self._arm, dtype=np.int64)
-            arrays = self._robot_arrays
+            # The kernels run the tree with its fixed steps folded away (fingers included, at
+            # the template's positions): their points move into the frames that carry them,
+            # and so much farther from those frames' origins at most.
+            tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
+            arrays = dict(self._robot_arrays)
+            shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])
+            point_norm = self._point_norm + shift[arrays["body_step"]]
+            for steps, points in _FOLDED:
+                arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
             self._data = KernelData(
-                *self._kin.arrays(),
+                *tree,
                 template=template,
                 arm=arm,
                 **arrays,
                 objects=_primitives(world.values()),
-                speed=speed_table(
-                    *self._kin.arrays(), template, arm, arrays["body_step"], self._point_norm
-                ),
+                speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
                 **{
                     name: np.sqrt(np.maximum(arrays[squared], 0.0))
                     for name, squared in _ROOTS.items()

@@ -1,6 +1,7 @@
 """Batched forward kinematics (planning.collision.sphere_fk): BatchedKinematics gives the same
 body poses as Drake's plant for many configurations at once, revolute, prismatic and weld joints
-alike (the Panda's arm, fingers and hand), and refuses trees with other joint types."""
+alike (the Panda's arm, fingers and hand), refuses trees with other joint types, and folds the
+steps that cannot move in a plan into those that can (fold_fixed_steps, fold_points)."""
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ from pydrake.multibody.tree import BallRpyJoint, PrismaticJoint, RevoluteJoint, 
 
 import planning.collision.sphere_fk as mut
 from planning import PlanningScene
+from planning.collision.sphere_kernel import transforms
 
 
 @pytest.fixture(scope="module")
@@ -114,3 +116,48 @@ def test_other_joint_types_and_floating_bodies_are_refused(joint_type):
     plant, bodies = chain(joint_type)  # None: body "a" floats
     with pytest.raises(NotImplementedError):
         mut.BatchedKinematics(plant, bodies)
+
+
+def test_folding_keeps_one_step_per_arm_joint_and_every_pose(scene):
+    """The fixed steps (welds, and the fingers at the template's positions) fold into the arm
+    joints' steps; every old step's pose is its new step's pose times its offset, and points
+    moved with ``fold_points`` land where they were."""
+    plant = scene.plant
+    dut = mut.BatchedKinematics(plant, panda_bodies(scene))
+    full = random_full(scene, 8, seed=2)
+    template = full[0].copy()
+    arm = np.asarray(scene.model.arm_indices, dtype=np.int64)
+    tree, offsets = mut.fold_fixed_steps(*dut.arrays(), template, arm)
+    parent, kind, q_index, _ = tree
+    moving = kind > 0
+    assert sorted(q_index[moving].tolist()) == sorted(arm.tolist())  # each arm joint once
+    assert np.all(parent[~moving] == -1)  # what stays fixed hangs from the world, constant
+    assert len(parent) < len(dut.arrays()[0]) and np.all(parent < np.arange(len(parent)))
+    fulls = np.tile(template, (len(full), 1))
+    fulls[:, arm] = full[:, arm]  # the arm moves, the fingers stay at the template
+    old = transforms(fulls, *dut.arrays())
+    new = transforms(fulls, *tree)
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(len(offsets), 3))
+    steps, moved = mut.fold_points(offsets, np.arange(len(offsets)), points)
+    for s, (step, X) in enumerate(offsets):
+        assert steps[s] == step
+        for n in range(len(full)):
+            X_old = np.vstack([old[n, s], [0, 0, 0, 1]])
+            X_new = np.vstack([new[n, step], [0, 0, 0, 1]])
+            np.testing.assert_allclose(X_new @ X, X_old, atol=1e-12)
+            np.testing.assert_allclose(
+                new[n, step, :, :3] @ moved[s] + new[n, step, :, 3],
+                old[n, s, :, :3] @ points[s] + old[n, s, :, 3],
+                atol=1e-12,
+            )
+
+
+def test_folding_a_tree_whose_joints_all_move_changes_nothing():
+    plant, bodies = chain(PrismaticJoint)
+    dut = mut.BatchedKinematics(plant, bodies)
+    tree, offsets = mut.fold_fixed_steps(*dut.arrays(), np.zeros(2), np.array([0, 1]))
+    for got, want in zip(tree, dut.arrays(), strict=True):
+        np.testing.assert_array_equal(got, want)
+    assert [step for step, _ in offsets] == [0, 1]
+    assert all(np.array_equal(X, np.eye(4)) for _, X in offsets)
