@@ -11,9 +11,10 @@ those:
 2. RRT-Connect (Kuffner and LaValle, ICRA 2000), one extension at a time, edges checked at the
    search resolution, the smaller tree extended first (``balance``, as VAMP's RRT-Connect does:
    on all of MBM 55 % fewer checks and the compiled search's p95 23.5 -> 10.8 ms, against the
-   trees taking turns), optionally with dynamic-domain sampling (Yershova, Jaillet, Simeon and
-   LaValle, ICRA 2005). Restarts with fresh trees were measured no better on the hard MBM
-   problems (at 4k and 10k checks, 14 and 9 of the 50 slowest gave up, against 3 without);
+   trees taking turns), and with dynamic-domain sampling (Yershova, Jaillet, Simeon and
+   LaValle, ICRA 2005; ``RrtConnectOptions.dynamic_domain``). Restarts with fresh trees were
+   measured no better on the hard MBM problems (at 4k and 10k checks, 14 and 9 of the 50
+   slowest gave up, against 3 without);
 3. shortcutting: greedy vertex skipping, then random shortcuts between points along the path
    (Geraerts and Overmars, IJRR 2007), then greedy again;
 and ``fine_check`` then checks every sample of the result at the fine resolution, 32 at a time

@@ -26,7 +26,7 @@ def test_defaults_are_the_documented_values():
         step=0.5,
         goal_bias=0.05,
         balance=True,
-        dynamic_domain=0.0,
+        dynamic_domain=4.0,
         dynamic_domain_min=1.0,
         batch=16,
         restart_interval=10.0,
