@@ -135,9 +135,10 @@ def fold_fixed_steps(parent, kind, q_index, terms, template, arm):
     """The tree of ``BatchedKinematics.arrays`` with every step that cannot move in a plan
     folded into the nearest step that can: welds, and joints other than the arm's (the
     fingers), which stay at their ``template`` positions. Forward kinematics then costs one
-    step per arm joint (the Panda's 13 steps become 7, a step above the first arm joint
-    being folded into it): the points of a folded step are moved into the frame of the step
-    it was folded into (``fold_points``).
+    step per arm joint and one constant step per fixed body hanging from the world (the
+    Panda's 13 steps become 8: its base, then the first joint's step with the base's pose
+    taken in): the points of a folded step are moved into the frame of the step it was folded
+    into (``fold_points``).
 
     Args:
         parent, kind, q_index, terms: the tree (``BatchedKinematics.arrays``).

@@ -125,9 +125,10 @@ class SphereCollisionModel:
                 self._held_signature = signature[1]
             template = np.ascontiguousarray(self._template, dtype=float)
             arm = np.asarray(self._arm, dtype=np.int64)
-            # The kernels run the tree with its fixed steps folded away (fingers included, at
-            # the template's positions): their points move into the frames that carry them,
-            # and so much farther from those frames' origins at most.
+            # The kernels run the tree with its fixed steps folded away (the fingers too, at
+            # the template's positions): the points those steps carried move into the frames
+            # of the steps that carry them now, at most their offset's translation farther
+            # from those frames' origins (which the speed bounds take in).
             tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
             arrays = dict(self._robot_arrays)
             shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])

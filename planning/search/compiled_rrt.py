@@ -207,8 +207,9 @@ def _rrt_connect(
     (the start tree on a tie), else the trees take turns. ``domain`` (rad; inf: off) is
     dynamic-domain sampling: a node whose extension failed gets that radius (later failures
     shrink it by 1e-4, down to ``domain_min``; successes grow it as much) and a target farther
-    than its nearest node's radius is drawn again without a check. Such rejections count an
-    eighth of a check each against ``max_checks``, so the loop ends."""
+    than its nearest node's radius is drawn again without a check. Such rejections count
+    against ``max_checks`` too, by the nearest-node scan they cost (an eighth of a check, and
+    another eighth per 128 nodes scanned), so that the budget still bounds the time."""
     dim = len(q_start)
     counter = scratch[3]
     nodes = [np.empty((256, dim)), np.empty((256, dim))]
@@ -222,7 +223,7 @@ def _rrt_connect(
     target = np.empty(dim)
     q_new = np.empty(dim)
     a = 1
-    rejected = 0
+    rejected = 0  # eighths of a check
     while counter[0] + rejected // 8 < max_checks:
         a = (0 if sizes[0] <= sizes[1] else 1) if balance else 1 - a
         b = 1 - a
@@ -238,7 +239,7 @@ def _rrt_connect(
         near, dist = _nearest(cols[a], sizes[a], target, distances)
         radius = radii[a][near]
         if dist > radius:
-            rejected += 1
+            rejected += 1 + sizes[a] // 128
             continue
         if dist > 1e-9:
             scale = min(1.0, step / dist)
