@@ -102,9 +102,10 @@ def _nearest(cols, size, q, work):
 
 
 @njit(cache=True)
-def _grow(nodes, cols, parent, size, q, p):
+def _grow(nodes, cols, parent, radii, size, q, p):
     """Adds node q with parent p to a tree (its rows ``nodes``, the same by coordinates
-    ``cols``); returns the arrays (doubled when full) and the new size."""
+    ``cols``, each node's parent and dynamic-domain radius, inf until an extension from it
+    fails); returns the arrays (doubled when full) and the new size."""
     if size == len(nodes):
         bigger = np.empty((2 * len(nodes), nodes.shape[1]))
         bigger[:size] = nodes
@@ -112,11 +113,14 @@ def _grow(nodes, cols, parent, size, q, p):
         wider[:, :size] = cols[:, :size]
         more = np.empty(2 * len(parent), dtype=np.int64)
         more[:size] = parent
-        nodes, cols, parent = bigger, wider, more
+        farther = np.empty(2 * len(radii))
+        farther[:size] = radii
+        nodes, cols, parent, radii = bigger, wider, more, farther
     nodes[size] = q
     cols[:, size] = q
     parent[size] = p
-    return nodes, cols, parent, size + 1
+    radii[size] = np.inf
+    return nodes, cols, parent, radii, size + 1
 
 
 @njit(cache=True)
@@ -177,16 +181,6 @@ def _free(q_a, q_b, step, d, scratch, end_known=False):
 
 
 @njit(cache=True)
-def _widened(radii, capacity):
-    """``radii`` grown to ``capacity`` entries, the new ones inf."""
-    if len(radii) >= capacity:
-        return radii
-    out = np.full(capacity, np.inf)
-    out[: len(radii)] = radii
-    return out
-
-
-@njit(cache=True)
 def _rrt_connect(
     q_start,
     q_goal,
@@ -215,10 +209,14 @@ def _rrt_connect(
     nodes = [np.empty((256, dim)), np.empty((256, dim))]
     cols = [np.empty((dim, 256)), np.empty((dim, 256))]
     parents = [np.empty(256, dtype=np.int64), np.empty(256, dtype=np.int64)]
-    radii = [np.full(256, np.inf), np.full(256, np.inf)]
+    radii = [np.empty(256), np.empty(256)]
     sizes = [0, 0]
-    nodes[0], cols[0], parents[0], sizes[0] = _grow(nodes[0], cols[0], parents[0], 0, q_start, -1)
-    nodes[1], cols[1], parents[1], sizes[1] = _grow(nodes[1], cols[1], parents[1], 0, q_goal, -1)
+    nodes[0], cols[0], parents[0], radii[0], sizes[0] = _grow(
+        nodes[0], cols[0], parents[0], radii[0], 0, q_start, -1
+    )
+    nodes[1], cols[1], parents[1], radii[1], sizes[1] = _grow(
+        nodes[1], cols[1], parents[1], radii[1], 0, q_goal, -1
+    )
     distances = np.empty(256)
     target = np.empty(dim)
     q_new = np.empty(dim)
@@ -227,8 +225,6 @@ def _rrt_connect(
     while counter[0] + rejected // 8 < max_checks:
         a = (0 if sizes[0] <= sizes[1] else 1) if balance else 1 - a
         b = 1 - a
-        radii[0] = _widened(radii[0], len(nodes[0]))
-        radii[1] = _widened(radii[1], len(nodes[1]))
         if _uniform(rng) < goal_bias:
             target[:] = nodes[b][0]
         else:
@@ -252,8 +248,8 @@ def _rrt_connect(
             else:
                 if radius < np.inf:
                     radii[a][near] = radius * 1.0001
-                nodes[a], cols[a], parents[a], sizes[a] = _grow(
-                    nodes[a], cols[a], parents[a], sizes[a], q_new, near
+                nodes[a], cols[a], parents[a], radii[a], sizes[a] = _grow(
+                    nodes[a], cols[a], parents[a], radii[a], sizes[a], q_new, near
                 )
                 new = sizes[a] - 1
                 # Connect tree b towards the new node along the straight line.
@@ -288,14 +284,14 @@ def _rrt_connect(
                         if _classify_one(q, d, True, work, lam)[0] != FREE:
                             whole = False
                             break
-                        nodes[b], cols[b], parents[b], sizes[b] = _grow(
-                            nodes[b], cols[b], parents[b], sizes[b], q, index
+                        nodes[b], cols[b], parents[b], radii[b], sizes[b] = _grow(
+                            nodes[b], cols[b], parents[b], radii[b], sizes[b], q, index
                         )
                         index = sizes[b] - 1
                         k += 1
                     if whole:
-                        nodes[b], cols[b], parents[b], sizes[b] = _grow(
-                            nodes[b], cols[b], parents[b], sizes[b], q_new, index
+                        nodes[b], cols[b], parents[b], radii[b], sizes[b] = _grow(
+                            nodes[b], cols[b], parents[b], radii[b], sizes[b], q_new, index
                         )
                         reached = sizes[b] - 1
                 if reached >= 0:
