@@ -23,7 +23,8 @@ sphere; only groups (and group pairs) with anything near reach the per-sphere pa
 configuration stops at its first certain collision. Every comparison has a margin of
 ``_MARGIN`` on the safe side. World objects are re-read whenever the
 scene's objects change, the robot's spheres whenever held objects or filters change, and the
-finger positions on every change.
+robot's part of the kernel data (its folded kinematics, speed bounds) when those or the finger
+positions change.
 """
 
 from __future__ import annotations
@@ -76,7 +77,7 @@ class SphereCollisionModel:
         self._attachment = int(plant.GetBodyByName(ATTACHMENT_BODY, scene.model.instance).index())
         self._held_cache: dict[tuple, SphereSet] = {}
         self._groups_cache: dict[int, tuple] = {}  # body -> _body_groups
-        self._signature = self._held_signature = self._version = None
+        self._signature = self._held_signature = self._robot_signature = self._version = None
         self.supported = True
         try:
             query = checker.MakeStandaloneModelContext().GetQueryObject()
@@ -123,30 +124,38 @@ class SphereCollisionModel:
                 self._filtered = filtered
                 self._build_robot(held)
                 self._held_signature = signature[1]
-            template = np.ascontiguousarray(self._template, dtype=float)
-            arm = np.asarray(self._arm, dtype=np.int64)
-            # The kernels run the tree with its fixed steps folded away (the fingers too, at
-            # the template's positions): the points those steps carried move into the frames
-            # of the steps that carry them now, at most their offset's translation farther
-            # from those frames' origins (which the speed bounds take in).
-            tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
-            arrays = dict(self._robot_arrays)
-            shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])
-            point_norm = self._point_norm + shift[arrays["body_step"]]
-            for steps, points in _FOLDED:
-                arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
-            self._data = KernelData(
-                *tree,
-                template=template,
-                arm=arm,
-                **arrays,
-                objects=_primitives(world.values()),
-                speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
-                **{
-                    name: np.sqrt(np.maximum(arrays[squared], 0.0))
-                    for name, squared in _ROOTS.items()
-                },
-            )
+            if signature[1:] != self._robot_signature:  # the robot's part: held objects, fingers
+                self._robot_data = self._robot_kernel_arrays()
+                self._robot_signature = signature[1:]
+            self._data = KernelData(**self._robot_data, objects=_primitives(world.values()))
+
+    def _robot_kernel_arrays(self) -> dict:
+        """The ``KernelData`` fields other than ``objects`` (they depend on the robot, its held
+        objects and the finger positions alone, not on the world's objects)."""
+        template = np.ascontiguousarray(self._template, dtype=float)
+        arm = np.asarray(self._arm, dtype=np.int64)
+        # The kernels run the tree with its fixed steps folded away (the fingers too, at the
+        # template's positions): the points those steps carried move into the frames of the
+        # steps that carry them now, at most their offset's translation farther from those
+        # frames' origins (which the speed bounds take in).
+        tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
+        arrays = dict(self._robot_arrays)
+        shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])
+        point_norm = self._point_norm + shift[arrays["body_step"]]
+        for steps, points in _FOLDED:
+            arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
+        parent, kind, q_index, terms = tree
+        return dict(
+            parent=parent,
+            kind=kind,
+            q_index=q_index,
+            terms=terms,
+            template=template,
+            arm=arm,
+            **arrays,
+            speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
+            **{name: np.sqrt(np.maximum(arrays[squared], 0.0)) for name, squared in _ROOTS.items()},
+        )
 
     def _build_robot(self, held) -> None:
         sets = dict(self._robot)
