@@ -19,6 +19,7 @@ is only partly achievable is returned with ``success=False`` and the fraction ac
 """
 
 import dataclasses as dc
+import functools
 import math
 import time
 
@@ -60,6 +61,7 @@ class MotionPlanner:
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
         announce_compile(
+            compiled_rrt.solve,
             compiled_rrt.plan,
             compiled_rrt.fine_check,
             classify_many,
@@ -70,8 +72,11 @@ class MotionPlanner:
         )
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
         cubic.warm_up()
-        if self._options.spheres.enabled:  # covers are made (or read from the cache) here, once
-            sphere_model(scene, self._options.spheres.slack)
+        spheres = self._options.spheres
+        if spheres.enabled:  # covers are made (or read from the cache) here, once
+            sphere_model(scene, spheres.slack)
+            if spheres.refine_slack:
+                sphere_model(scene, spheres.refine_slack)
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
         self._search.warm_up()  # the compiled search is compiled or loaded here, once
         self._limit_lists = [limit.tolist() for limit in self._search.limits]  # for _as_arm
@@ -133,9 +138,7 @@ class MotionPlanner:
         """
         t0 = time.perf_counter()
         deadline = t0 + (timeout or self._options.timeout)
-        q_start = self._check_start(q_start)
-        q_goal = self._check_goal(q_goal)
-        path, how = self._search.find(q_start, q_goal, deadline)
+        path, how = self._find(q_start, q_goal, deadline)
         return self._result(path, how, t0)
 
     def plan_to_named(self, name: str, *, q_start=None, timeout: float | None = None):
@@ -248,26 +251,44 @@ class MotionPlanner:
         how it was found ("straight", "rrt_connect", ...); for benchmarks and callers that time
         paths themselves."""
         deadline = time.perf_counter() + (timeout or self._options.timeout)
-        return self._search.find(self._check_start(q_start), self._check_goal(q_goal), deadline)
+        return self._find(q_start, q_goal, deadline)
+
+    def _find(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
+        """The search between two joint configurations, the ends checked on the way: their
+        values here, their collisions in the search's first (compiled) call, Drake deciding
+        what the spheres cannot (``_check_ends``)."""
+        q_start = self._as_arm(
+            self._state.q if q_start is None else q_start, ErrorCode.INVALID_START, "start"
+        )
+        q_goal = self._as_arm(q_goal, ErrorCode.INVALID_GOAL, "goal")
+        ends = functools.partial(self._check_ends, q_start, q_goal)
+        return self._search.find(q_start, q_goal, deadline, ends)
 
     # ------------------------------------------------------------------------- checking ----
+    def _check_ends(self, q_start, q_goal, start: bool, goal: bool) -> None:
+        """Raises START_IN_COLLISION or GOAL_IN_COLLISION (naming the bodies) when Drake finds
+        the start (when ``start``) or the goal (when ``goal``) colliding."""
+        if start:
+            self._raise_if_colliding(q_start, ErrorCode.START_IN_COLLISION, "start")
+        if goal:
+            self._raise_if_colliding(q_goal, ErrorCode.GOAL_IN_COLLISION, "goal")
+
     def _check_start(self, q_start) -> np.ndarray:
         q = self._state.q if q_start is None else q_start
         return self._check(q, ErrorCode.INVALID_START, ErrorCode.START_IN_COLLISION, "start")
-
-    def _check_goal(self, q_goal) -> np.ndarray:
-        return self._check(q_goal, ErrorCode.INVALID_GOAL, ErrorCode.GOAL_IN_COLLISION, "goal")
 
     def _check(self, q, invalid: ErrorCode, colliding: ErrorCode, what: str) -> np.ndarray:
         """Returns ``q`` as 7 arm joints, or raises ``invalid`` (not finite, wrong size, out of
         limits) or ``colliding`` (naming the bodies in collision)."""
         q = self._as_arm(q, invalid, what)
         # The spheres cover the geometry: what they prove free, Drake finds free too.
-        if not (self._search.proves_free(q) or self._scene.is_collision_free(q)):
-            raise PlanningError(
-                colliding, f"the {what} collides: {self._scene.describe_collisions(q)}"
-            )
+        if not self._search.proves_free(q):
+            self._raise_if_colliding(q, colliding, what)
         return q
+
+    def _raise_if_colliding(self, q, code: ErrorCode, what: str) -> None:
+        if not self._scene.is_collision_free(q):
+            raise PlanningError(code, f"the {what} collides: {self._scene.describe_collisions(q)}")
 
     def _as_arm(self, q, code: ErrorCode, what: str) -> np.ndarray:
         # On plain floats: a few numpy calls on 7 values cost more than the sphere check.

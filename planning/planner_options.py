@@ -226,6 +226,11 @@ class SphereCheckOptions:
     # in the fine check. 0: they block, like any other. Measured on all of MBM: 0.15 solved
     # every problem (p95 23.5 ms); 0 left one to the Python search, which timed out.
     anchor_radius: float = 0.15
+    # m; a second, tighter cover (this slack) decides the configurations the first cannot before
+    # Drake is asked about them (0: straight to Drake). Measured on the fine checks of a third
+    # of MBM's paths: 0.005 (1163 spheres) proves 55 % of those samples free, 0.002 (5105
+    # spheres) 59 %, where Drake costs ~0.2 ms a configuration.
+    refine_slack: float = 0.005
 
     def check(self, prefix: str = "spheres") -> None:
         """Raises ValueError naming the first field out of range."""
@@ -238,6 +243,12 @@ class SphereCheckOptions:
             f"{prefix}.anchor_radius",
             ">= 0",
             self.anchor_radius,
+        )
+        _require(
+            self.refine_slack == 0.0 or 0.0 < self.refine_slack < self.slack,
+            f"{prefix}.refine_slack",
+            f"0 (off) or in (0, slack = {self.slack})",
+            self.refine_slack,
         )
 
 

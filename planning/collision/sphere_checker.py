@@ -43,6 +43,8 @@ class SphereCheckerAdapter(CheckerAdapter):
         fallback_after: how many configurations the spheres classify before Drake decides
             those they cannot; until then these count as colliding (conservative): a fast
             search first, Drake for narrow passages later. None: Drake decides them always.
+        refine_slack: m; when given (> 0), a second, tighter cover decides what the first
+            cannot before Drake is asked (it proves some free, some colliding).
 
     Attributes:
         counts: how many configurations were decided by spheres and how many went to Drake.
@@ -55,10 +57,14 @@ class SphereCheckerAdapter(CheckerAdapter):
         *,
         slack: float = 0.015,
         fallback_after: int | None = None,
+        refine_slack: float | None = None,
     ):
         super().__init__(scene, resolution)
         self._model = sphere_model(scene, slack)
         self._model.sync()
+        self._refine = sphere_model(scene, refine_slack) if refine_slack else None
+        if self._refine is not None:
+            self._refine.sync()
         self._fallback_after = fallback_after
         self.counts = {"spheres": 0, "drake": 0}
 
@@ -82,14 +88,28 @@ class SphereCheckerAdapter(CheckerAdapter):
         unknown = np.flatnonzero(state == UNKNOWN)
         self.counts["spheres"] += len(qs) - len(unknown)
         if len(unknown) and self._fallback():
-            self.counts["drake"] += len(unknown)
             free[unknown] = self._drake_free(qs[unknown])
         return free
 
     def _drake_free(self, qs: np.ndarray) -> np.ndarray:
-        if len(qs) <= _SERIAL:  # the parallel call costs more for a few configurations
-            return np.array([self._checker.CheckConfigCollisionFree(self.full(q)) for q in qs])
-        return super().configs_free(qs)
+        """Decides configurations the first cover cannot: the tighter cover first (when
+        there is one), Drake for the rest; counts them."""
+        free = np.zeros(len(qs), dtype=bool)
+        ask = np.ones(len(qs), dtype=bool)
+        if self._refine is not None and self._refine.active:
+            state = self._refine.classify(qs)
+            free = state == FREE
+            ask = state == UNKNOWN
+        self.counts["spheres"] += int(len(qs) - ask.sum())
+        self.counts["drake"] += int(ask.sum())
+        if not ask.any():
+            return free
+        if ask.sum() <= _SERIAL:  # the parallel call costs more for a few configurations
+            checker = self._checker
+            free[ask] = [checker.CheckConfigCollisionFree(self.full(q)) for q in qs[ask]]
+        else:
+            free[ask] = super().configs_free(qs[ask])
+        return free
 
     def free_prefix(self, q_a, q_b) -> float:
         """As ``CheckerAdapter.free_prefix`` (see ``free_prefixes``)."""
@@ -105,7 +125,6 @@ class SphereCheckerAdapter(CheckerAdapter):
         end, n, edge, local = self._model.prefixes(q_a, q_b, step, stop_at_unknown=not fallback)
         self.counts["spheres"] += int(np.minimum(end + 1, n).sum()) - len(edge)
         if fallback and len(edge):
-            self.counts["drake"] += len(edge)
             samples = q_a[edge] + ((local + 1) / n[edge])[:, None] * (q_b[edge] - q_a[edge])
             blocked = ~self._drake_free(samples)
             np.minimum.at(end, edge[blocked], local[blocked])
@@ -131,7 +150,6 @@ class SphereCheckerAdapter(CheckerAdapter):
         chunk = 4
         for start in range(0, len(unknown), chunk):
             piece = unknown[start : start + chunk]
-            self.counts["drake"] += len(piece)
             if not self._drake_free(piece).all():
                 return False
             chunk *= 2

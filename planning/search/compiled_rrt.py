@@ -49,7 +49,7 @@ from planning.collision.sphere_kernel import (
     refresh_cache,
 )
 
-FOUND, GAVE_UP = 0, 1
+FOUND, GAVE_UP, ENDS_UNPROVEN = 0, 1, 2
 _MARCH_BELOW = 0.05  # rad: edges sampled finer than this are checked in order, with certificates
 _MASK = (1 << 64) - 1
 
@@ -536,6 +536,82 @@ def plan(
 
 
 @njit(cache=True)
+def solve(
+    q_start,
+    q_goal,
+    lower,
+    upper,
+    d,
+    edge_step,
+    step,
+    goal_bias,
+    max_checks,
+    iterations,
+    rng,
+    anchor_radius,
+    balance,
+    domain,
+    domain_min,
+    check_ends,
+    fine_step,
+):
+    """A whole request in one call: with ``check_ends``, the start and the goal are classified
+    first; then ``plan`` (same arguments), and the path's ``_fine_check`` at ``fine_step`` (rad;
+    none when 0). One call instead of three, for each call from Python costs the dispatch of the
+    kernel data (35 arrays), 6 us when the caches are warm and 70-110 us right after a scene
+    set-up has evicted them (measured on this project's 2-core VM).
+
+    Returns:
+        (status, path, how, checks, unproven, bad, unknown, segment): ``plan``'s four (with
+        ``checks`` counting the ends' and the fine check's too), or ENDS_UNPROVEN with no path
+        when the spheres cannot prove an end free (``unproven``: bit 0 the start, bit 1 the
+        goal; the caller asks Drake, then calls again without ``check_ends``); then the fine
+        check's first colliding segment (-1: none), the UNKNOWN samples before it and their
+        segments (``_fine_check``; -1 and none when not FOUND or ``fine_step`` is 0).
+    """
+    dim = len(q_start)
+    unknown = np.empty((0, dim))
+    segment = np.empty(0, dtype=np.int64)
+    unproven = 0
+    checks = 0
+    if check_ends:
+        scratch = make_scratch(d, dim, unknown, 0.0)  # no anchors: UNKNOWN blocks
+        work, lam, q, counter, anchors, _ = scratch
+        for k in range(2):
+            end = q_start if k == 0 else q_goal
+            first, n = edge_prefix(end, end, 1.0, d, work, lam, q, counter, anchors, 0.0)
+            if first < n:
+                unproven |= 1 << k
+        checks = counter[0]
+        if unproven:
+            return ENDS_UNPROVEN, np.empty((0, dim)), 0, checks, unproven, -1, unknown, segment
+    status, path, how, searched = plan(
+        q_start,
+        q_goal,
+        lower,
+        upper,
+        d,
+        edge_step,
+        step,
+        goal_bias,
+        max_checks,
+        iterations,
+        rng,
+        anchor_radius,
+        balance,
+        domain,
+        domain_min,
+    )
+    checks += searched
+    bad = -1
+    if status == FOUND and fine_step > 0.0:
+        counter = np.zeros(1, dtype=np.int64)
+        bad, unknown, segment = _fine_check(path, fine_step, d, counter)
+        checks += counter[0]
+    return status, path, how, checks, unproven, bad, unknown, segment
+
+
+@njit(cache=True)
 def fine_check(path, step, d):
     """``_fine_check`` of a path (N, 7) at ``step``, rad: (first COLLIDING segment or -1, the
     UNKNOWN samples, their segments, configurations classified)."""
@@ -545,11 +621,13 @@ def fine_check(path, step, d):
 
 
 def warm_up(data, lower, upper) -> None:
-    """Compiles (first run on a machine, with a note on stderr) or loads ``plan`` and
-    ``fine_check`` now rather than in a request: a one-sample problem."""
-    sphere_kernel.announce_compile(plan, fine_check)
+    """Compiles (first run on a machine, with a note on stderr) or loads ``solve``, ``plan``
+    and ``fine_check`` now rather than in a request: a one-sample problem."""
+    sphere_kernel.announce_compile(solve, plan, fine_check)
     q = np.ascontiguousarray((lower + upper) / 2.0)
-    plan(q, q, lower, upper, data, 0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
+    args = (lower, upper, data, 0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
+    solve(q, q, *args, True, 0.01)
+    plan(q, q, *args)
     fine_check(np.vstack([q, q]), 0.01, data)
 
 

@@ -45,7 +45,12 @@ class JointPathSearch:
 
     Attributes:
         gcs: a ``planning.search.gcs.SceneGcs`` tried before RRT-Connect, or None.
+        fused: the compiled search checks the ends, searches and fine-checks in one call
+            (``compiled_rrt.solve``); False (the benchmark's profiler) makes those separate
+            calls, each timed, at the cost of their dispatches.
     """
+
+    fused = True
 
     def __init__(self, scene, options):
         self._scene = scene
@@ -67,7 +72,13 @@ class JointPathSearch:
         if search:
             after = opts.drake_fallback_after
             resolution = opts.search_resolution
-        return SphereCheckerAdapter(self._scene, resolution, slack=opts.slack, fallback_after=after)
+        return SphereCheckerAdapter(
+            self._scene,
+            resolution,
+            slack=opts.slack,
+            fallback_after=after,
+            refine_slack=opts.refine_slack,
+        )
 
     def _sphere_model(self):
         """The scene's sphere model when it can answer (spheres enabled, all shapes covered),
@@ -78,9 +89,19 @@ class JointPathSearch:
         model = sphere_model(self._scene, opts.slack)
         return model if model.active else None
 
+    def _refine_model(self):
+        """The tighter cover that decides what the first cannot (``spheres.refine_slack``),
+        when enabled and able to answer, else None."""
+        opts = self._options.spheres
+        if not (opts.enabled and opts.refine_slack):
+            return None
+        model = sphere_model(self._scene, opts.refine_slack)
+        return model if model.active else None
+
     def prepare(self) -> None:
-        """Syncs the sphere model with the scene (see ``MotionPlanner.prepare``)."""
+        """Syncs the sphere models with the scene (see ``MotionPlanner.prepare``)."""
         self._sphere_model()
+        self._refine_model()
 
     def warm_up(self) -> None:
         """Has the compiled search ready (compiled, or loaded from numba's cache): once, when
@@ -89,17 +110,33 @@ class JointPathSearch:
         if model is not None:
             compiled_rrt.warm_up(model.kernel_data(), *self.limits)
 
-    def proves_free(self, q) -> bool:
-        """True when the sphere model proves the arm configuration q (7,) collision-free (then
-        Drake's checker finds it free too); False when it cannot tell or there is none."""
-        model = self._sphere_model()
-        return model is not None and bool(model.classify(q)[0] == FREE)
+    def proves_free(self, q, *, first: bool = True) -> bool:
+        """True when the sphere models prove the arm configuration q (7,) collision-free (then
+        Drake's checker finds it free too): the first cover, then the tighter one; False when
+        they cannot tell or there are none. ``first`` False: the tighter one alone (the first
+        has been asked)."""
+        for model in (self._sphere_model() if first else None, self._refine_model()):
+            if model is not None and model.classify(q)[0] == FREE:
+                return True
+        return False
 
-    def find(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:
+    def find(self, q_start, q_goal, deadline: float, check_ends=None) -> tuple[np.ndarray, str]:
+        """A validated path from q_start to q_goal (7,) and how it was found.
+
+        Args:
+            check_ends: None when the caller has checked both ends; else a callable
+                ``check_ends(start, goal)`` that decides with Drake the ends whose flag is True
+                (those the spheres could not prove free) and raises when one collides. It is
+                called before any search (in the compiled search, after the ends' sphere check,
+                which is part of that one call).
+        """
         opts = self._options
         if time.perf_counter() > deadline:
             raise self._failure(deadline, "no time was left to search")
-        compiled = self._compiled(q_start, q_goal, deadline)
+        if check_ends is not None and not (self.fused and self._compiled_model() is not None):
+            check_ends(not self.proves_free(q_start), not self.proves_free(q_goal))
+            check_ends = None
+        compiled = self._compiled(q_start, q_goal, deadline, check_ends)
         if compiled is not None and compiled[0] is not None:
             return compiled[0], compiled[1]
         adapter = self.adapter(search=True)
@@ -134,18 +171,26 @@ class JointPathSearch:
             path, how = self._refined(path, how)
         return path, how
 
-    def _compiled(self, q_start, q_goal, deadline: float):
-        """The compiled search and its fine check (``planning.search.compiled_rrt``), with up
+    def _compiled_model(self):
+        """The sphere model of the compiled search, or None when that search does not apply
+        (no sphere model, GCS or KTO in use)."""
+        if self.gcs is not None or self._options.kto.enabled:
+            return None
+        return self._sphere_model()
+
+    def _compiled(self, q_start, q_goal, deadline: float, check_ends=None):
+        """The compiled search and its fine check (``planning.search.compiled_rrt.solve``: one
+        call, the ends' sphere check first when ``check_ends`` is given, see ``find``), with up
         to ``validation.max_repairs`` compiled repairs of a segment that fails it.
 
         Returns:
-            None when it does not apply (no sphere model, GCS or KTO in use); else (path, how,
-            None) for a checked path, (None, how, path) for a path that still fails the fine
-            check, or (None, "rrt_connect", None) when the search gave up.
+            None when it does not apply (``_compiled_model``); else (path, how, None) for a
+            checked path, (None, how, path) for a path that still fails the fine check, or
+            (None, "rrt_connect", None) when the search gave up.
         """
         opts = self._options
-        model = self._sphere_model()
-        if model is None or self.gcs is not None or opts.kto.enabled:
+        model = self._compiled_model()
+        if model is None:
             return None
         data = model.kernel_data()
         lower, upper = self.limits
@@ -155,11 +200,11 @@ class JointPathSearch:
         # gives the same path on any machine.
         left = max(0.0, deadline - time.perf_counter())
         budget = max(1, min(opts.spheres.drake_fallback_after, int(left / _CHECK_S)))
+        spheres, fine = opts.spheres, opts.validation.resolution
 
-        def search(q_a, q_b, edge_step, step, anchor_radius):
-            return compiled_rrt.plan(
-                np.asarray(q_a, dtype=float),
-                np.asarray(q_b, dtype=float),
+        def arguments(edge_step, step, anchor_radius):
+            # By position: numba's dispatch of keyword arguments costs ~0.5 ms a call.
+            return (
                 lower,
                 upper,
                 data,
@@ -175,34 +220,48 @@ class JointPathSearch:
                 opts.rrt.dynamic_domain_min,
             )
 
-        spheres, fine = opts.spheres, opts.validation.resolution
-        status, path, how, _ = search(
-            q_start, q_goal, spheres.search_resolution, opts.rrt.step, spheres.anchor_radius
-        )
+        search = arguments(spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
+        # Repairs re-plan a segment on fine edges, the spheres alone deciding (nothing to ask).
+        repair = arguments(fine, opts.validation.repair_step, 0.0)
+        q_start = np.asarray(q_start, dtype=float)
+        q_goal = np.asarray(q_goal, dtype=float)
+        if self.fused:
+            result = compiled_rrt.solve(q_start, q_goal, *search, check_ends is not None, fine)
+            if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
+                check_ends(
+                    bool(result[4] & 1) and not self.proves_free(q_start, first=False),
+                    bool(result[4] & 2) and not self.proves_free(q_goal, first=False),
+                )  # raises when one collides
+                result = compiled_rrt.solve(q_start, q_goal, *search, False, fine)
+            status, path, how, _, _, bad, unknown, segment = result
+            checked = (bad, unknown, segment)
+        else:  # the same steps as separate calls (the ends checked in find), each timed
+            status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *search)
+            checked = None
         name = "straight" if how == 0 else "rrt_connect"
         if status != compiled_rrt.FOUND:
             return None, "rrt_connect", None
-        for repair in range(opts.validation.max_repairs + 1):
-            bad = self._first_failing_segment(path, fine, data)
+        for attempt in range(opts.validation.max_repairs + 1):
+            bad = self._first_failing_segment(path, fine, data, checked)
+            checked = None
             if bad < 0:
                 return path, name, None
-            if repair == opts.validation.max_repairs:
+            if attempt == opts.validation.max_repairs:
                 break
-            # Re-plan the segment on fine edges, the spheres alone deciding (nothing to ask).
-            status, piece, _, _ = search(
-                path[bad], path[bad + 1], fine, opts.validation.repair_step, 0.0
-            )
+            status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair)
             if status != compiled_rrt.FOUND:
                 break
             path = np.vstack([path[:bad], piece, path[bad + 2 :]])
             name = "rrt_connect+repaired"
         return None, name, path
 
-    def _first_failing_segment(self, path, resolution: float, data) -> int:
+    def _first_failing_segment(self, path, resolution: float, data, checked=None) -> int:
         """The first segment of the path with a sample at ``resolution`` that the spheres
         prove colliding or that Drake finds colliding among those they cannot decide; -1 when
-        none."""
-        bad, unknown, segment, _ = compiled_rrt.fine_check(path, resolution, data)
+        none. ``checked``: the spheres' fine check of this path when made already (``solve``)."""
+        if checked is None:
+            checked = compiled_rrt.fine_check(path, resolution, data)[:3]
+        bad, unknown, segment = checked
         if bad >= 0:  # only samples before the colliding segment matter
             unknown, segment = unknown[segment < bad], segment[segment < bad]
         if len(unknown):

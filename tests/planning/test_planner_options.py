@@ -50,6 +50,7 @@ def test_defaults_are_the_documented_values():
         drake_fallback_after=50_000,
         search_resolution=0.1,
         anchor_radius=0.15,
+        refine_slack=0.005,
     )
     o.check()
 
@@ -143,6 +144,8 @@ BAD_VALUES = [
     ("spheres", "search_resolution", 0.0),
     ("spheres", "anchor_radius", -0.1),
     ("spheres", "anchor_radius", float("inf")),
+    ("spheres", "refine_slack", -0.001),
+    ("spheres", "refine_slack", 0.015),  # not tighter than the first cover
 ]
 
 

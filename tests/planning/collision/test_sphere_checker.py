@@ -68,6 +68,29 @@ def test_configurations_agree_with_drake_and_are_counted(wall):
         assert dut.config_free(q) == f
 
 
+def test_a_tighter_cover_decides_part_of_what_the_first_cannot(wall):
+    """With ``refine_slack`` the configurations the first cover leaves UNKNOWN go to a tighter
+    one, and only those it cannot decide to Drake: the same answers, fewer Drake calls."""
+    scene = wall
+    qs = random_q(scene, 400, seed=2)
+    first = mut.SphereCheckerAdapter(scene).model
+    unknown = qs[first.classify(qs) == UNKNOWN]
+    assert len(unknown) >= 5
+    dut = mut.SphereCheckerAdapter(scene, refine_slack=0.005)
+    free = dut.configs_free(unknown)
+    np.testing.assert_array_equal(free, drake_free(scene, unknown))
+    tighter = mut.sphere_model(scene, 0.005).classify(unknown)
+    assert dut.counts["drake"] == np.sum(tighter == UNKNOWN) < len(unknown)
+    assert dut.counts["spheres"] + dut.counts["drake"] == len(unknown)
+    # Edges and prefixes decide their uncertain samples the same way.
+    plain = mut.SphereCheckerAdapter(scene, resolution=0.05)
+    refined = mut.SphereCheckerAdapter(scene, resolution=0.05, refine_slack=0.005)
+    for q_a, q_b in zip(unknown[:-1], unknown[1:], strict=True):
+        assert refined.edge_free(q_a, q_b) == plain.edge_free(q_a, q_b)
+        assert refined.free_prefix(q_a, q_b) == plain.free_prefix(q_a, q_b)
+    assert refined.counts["drake"] < plain.counts["drake"]
+
+
 def test_edges_and_prefixes_match_drake_samples(wall):
     scene = wall
     adapter = mut.SphereCheckerAdapter(scene, 0.05)

@@ -200,3 +200,31 @@ def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
     assert _edge_free(q_a, q_a - 0.3 * np.eye(7)[0], 0.1, data, none, 0.0)  # (a free one is)
     assert not _edge_free(q_a, bad, 0.1, data, none, 0.0)
     assert not _edge_free(bad, q_a, 0.1, data, none, 0.0)
+
+
+def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
+    scene, data, limits, ends
+):
+    args = (*limits, data, 0.1, 1.0, 0.05, 50_000, 20)
+    tail = (0.0, True, np.inf, 1.0)
+    status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
+        *ends, *args, mut.seed_state(3), *tail, True, FINE
+    )
+    alone = search(data, limits, *ends, seed=3)
+    assert status == alone[0] == mut.FOUND and how == alone[2] and unproven == 0
+    np.testing.assert_array_equal(path, alone[1])
+    fine = mut.fine_check(path, FINE, data)
+    assert bad == fine[0] == -1
+    np.testing.assert_array_equal(unknown, fine[1])
+    np.testing.assert_array_equal(segment, fine[2])
+    assert checks == alone[3] + fine[3] + 2  # and the two ends
+    # An end the spheres cannot prove free stops it before any search: bit 1 the goal.
+    ready = scene.model.named_configurations["ready"]  # inside the box
+    result = mut.solve(ends[0], ready, *args, mut.seed_state(3), *tail, True, FINE)
+    assert result[0] == mut.ENDS_UNPROVEN and result[4] == 2 and len(result[1]) == 0
+    nan = np.full(7, np.nan)
+    assert mut.solve(nan, ends[1], *args, mut.seed_state(3), *tail, True, FINE)[4] == 1
+    # Without the ends' check it searches; with fine_step 0 it does not fine-check.
+    result = mut.solve(*ends, *args, mut.seed_state(3), *tail, False, 0.0)
+    assert result[0] == mut.FOUND and result[3] == alone[3] and result[5] == -1
+    np.testing.assert_array_equal(result[1], alone[1])

@@ -94,21 +94,55 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
     scene, dut, ends, monkeypatch
 ):
     """The search's path is replaced by the straight line through the box: the fine check
-    finds the collision and a compiled re-plan of that segment mends it."""
-    real = mut.compiled_rrt.plan
-    first = []
+    (made in the same compiled call) finds the collision and a compiled re-plan of that segment
+    mends it."""
+    solve = mut.compiled_rrt.solve
 
     def through_the_box(q_a, q_b, *args):
-        if not first:
-            first.append(1)
-            return mut.compiled_rrt.FOUND, np.vstack([q_a, q_b]), 1, 0
-        return real(q_a, q_b, *args)
+        result = solve(q_a, q_b, *args)
+        straight = np.vstack([q_a, q_b])
+        checked = mut.compiled_rrt.fine_check(straight, args[-1], args[2])[:3]
+        return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
-    monkeypatch.setattr(mut.compiled_rrt, "plan", through_the_box)
+    monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
     monkeypatch.setattr(mut, "rrt_connect", lambda *a, **k: pytest.fail("Python RRT ran"))
     path, how = dut.find(*ends, deadline())
     assert how == "rrt_connect+repaired" and len(path) > 2
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
+
+
+@pytest.mark.parametrize("fused", [True, False], ids=["one-call", "separate-calls"])
+def test_the_ends_are_checked_in_the_search_and_drake_decides_the_unproven(
+    scene, ends, fused, monkeypatch
+):
+    """With ``check_ends``, the ends the spheres prove free are not asked about again; one
+    they cannot prove free (here: "ready", inside the box) goes to ``check_ends``, which
+    raises for a collision before any search."""
+    monkeypatch.setattr(mut.JointPathSearch, "fused", fused)
+    dut = mut.JointPathSearch(scene, MotionPlannerOptions())
+    asked = []
+    path, _ = dut.find(*ends, deadline(), lambda *flags: asked.append(flags))
+    assert (
+        asked in ([], [(False, False)])
+        and first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
+    )
+    ready = scene.model.named_configurations["ready"]  # inside the box
+
+    def collides(start, goal):
+        asked.append((start, goal))
+        raise PlanningError(ErrorCode.GOAL_IN_COLLISION, "the goal collides")
+
+    with pytest.raises(PlanningError, match="goal collides"):
+        dut.find(ends[0], ready, deadline(), collides)
+    assert asked[-1] == (False, True)
+
+
+def test_one_call_and_separate_calls_give_the_same_path(scene, ends, monkeypatch):
+    one, how = mut.JointPathSearch(scene, MotionPlannerOptions()).find(*ends, deadline())
+    monkeypatch.setattr(mut.JointPathSearch, "fused", False)
+    separate, again = mut.JointPathSearch(scene, MotionPlannerOptions()).find(*ends, deadline())
+    np.testing.assert_array_equal(one, separate)
+    assert how == again
 
 
 def test_the_spheres_prove_free_what_drake_finds_free(scene, dut, ends):
@@ -125,13 +159,13 @@ def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
     2 us a check), so a request with 5 ms left may check about 2 500 configurations, not the
     50 000 of drake_fallback_after; with the default timeout that bound is the one that binds."""
     budgets = []
-    real = mut.compiled_rrt.plan
+    real = mut.compiled_rrt.solve
 
     def recorded(*args):
         budgets.append(args[8])  # max_checks
         return real(*args)
 
-    monkeypatch.setattr(mut.compiled_rrt, "plan", recorded)
+    monkeypatch.setattr(mut.compiled_rrt, "solve", recorded)
     dut = mut.JointPathSearch(scene, MotionPlannerOptions())
     try:
         dut.find(*ends, time.perf_counter() + 0.005)
