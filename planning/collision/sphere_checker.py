@@ -88,12 +88,12 @@ class SphereCheckerAdapter(CheckerAdapter):
         unknown = np.flatnonzero(state == UNKNOWN)
         self.counts["spheres"] += len(qs) - len(unknown)
         if len(unknown) and self._fallback():
-            free[unknown] = self._drake_free(qs[unknown])
+            free[unknown] = self.undecided_free(qs[unknown])
         return free
 
-    def _drake_free(self, qs: np.ndarray) -> np.ndarray:
-        """Decides configurations the first cover cannot: the tighter cover first (when
-        there is one), Drake for the rest; counts them."""
+    def undecided_free(self, qs: np.ndarray) -> np.ndarray:
+        """Decides configurations the first cover cannot (rows of qs; a bool array): the
+        tighter cover first (when there is one), Drake for the rest; counts them."""
         free = np.zeros(len(qs), dtype=bool)
         ask = np.ones(len(qs), dtype=bool)
         if self._refine is not None and self._refine.active:
@@ -126,7 +126,7 @@ class SphereCheckerAdapter(CheckerAdapter):
         self.counts["spheres"] += int(np.minimum(end + 1, n).sum()) - len(edge)
         if fallback and len(edge):
             samples = q_a[edge] + ((local + 1) / n[edge])[:, None] * (q_b[edge] - q_a[edge])
-            blocked = ~self._drake_free(samples)
+            blocked = ~self.undecided_free(samples)
             np.minimum.at(end, edge[blocked], local[blocked])
         return np.where(end > 0, end / n, 0.0)
 
@@ -150,7 +150,7 @@ class SphereCheckerAdapter(CheckerAdapter):
         chunk = 4
         for start in range(0, len(unknown), chunk):
             piece = unknown[start : start + chunk]
-            if not self._drake_free(piece).all():
+            if not self.undecided_free(piece).all():
                 return False
             chunk *= 2
         if self._resolution is not None:

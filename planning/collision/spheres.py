@@ -78,6 +78,7 @@ class SphereCollisionModel:
         self._held_cache: dict[tuple, SphereSet] = {}
         self._groups_cache: dict[int, tuple] = {}  # body -> _body_groups
         self._signature = self._held_signature = self._robot_signature = self._version = None
+        self._packed = None  # (the KernelData, its packed buffers)
         self.supported = True
         try:
             query = checker.MakeStandaloneModelContext().GetQueryObject()
@@ -320,6 +321,13 @@ class SphereCollisionModel:
         self.sync()
         _kernel.announce_compile()
         return self._data
+
+    def packed_data(self) -> tuple[np.ndarray, np.ndarray]:
+        """``kernel_data`` in two buffers (``sphere_kernel.pack``), packed once per change."""
+        data = self.kernel_data()
+        if self._packed is None or self._packed[0] is not data:
+            self._packed = (data, _kernel.pack(data))
+        return self._packed[1]
 
     @property
     def sphere_bodies(self) -> np.ndarray:

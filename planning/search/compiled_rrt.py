@@ -46,7 +46,9 @@ from planning.collision.sphere_kernel import (
     _near_any,
     _work,
     edge_prefix,
+    pack,
     refresh_cache,
+    unpack,
 )
 
 FOUND, GAVE_UP, ENDS_UNPROVEN = 0, 1, 2
@@ -541,7 +543,8 @@ def solve(
     q_goal,
     lower,
     upper,
-    d,
+    floats,
+    ints,
     edge_step,
     step,
     goal_bias,
@@ -556,10 +559,11 @@ def solve(
     fine_step,
 ):
     """A whole request in one call: with ``check_ends``, the start and the goal are classified
-    first; then ``plan`` (same arguments), and the path's ``_fine_check`` at ``fine_step`` (rad;
-    none when 0). One call instead of three, for each call from Python costs the dispatch of the
-    kernel data (35 arrays), 6 us when the caches are warm and 70-110 us right after a scene
-    set-up has evicted them (measured on this project's 2-core VM).
+    first; then ``plan`` (same arguments, but the kernel data packed in two buffers:
+    ``sphere_kernel.pack``), and the path's ``_fine_check`` at ``fine_step`` (rad; none when
+    0). One call instead of three, and two arrays instead of 35: each call from Python types
+    and unboxes its arrays, KernelData's costing 6 us when the caches are warm and 40-110 us
+    right after a scene set-up has evicted them (measured on this project's 2-core VM).
 
     Returns:
         (status, path, how, checks, unproven, bad, unknown, segment): ``plan``'s four (with
@@ -569,6 +573,7 @@ def solve(
         check's first colliding segment (-1: none), the UNKNOWN samples before it and their
         segments (``_fine_check``; -1 and none when not FOUND or ``fine_step`` is 0).
     """
+    d = unpack(floats, ints)
     dim = len(q_start)
     unknown = np.empty((0, dim))
     segment = np.empty(0, dtype=np.int64)
@@ -625,9 +630,9 @@ def warm_up(data, lower, upper) -> None:
     and ``fine_check`` now rather than in a request: a one-sample problem."""
     sphere_kernel.announce_compile(solve, plan, fine_check)
     q = np.ascontiguousarray((lower + upper) / 2.0)
-    args = (lower, upper, data, 0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
-    solve(q, q, *args, True, 0.01)
-    plan(q, q, *args)
+    tail = (0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
+    solve(q, q, lower, upper, *pack(data), *tail, True, 0.01)
+    plan(q, q, lower, upper, data, *tail)
     fine_check(np.vstack([q, q]), 0.01, data)
 
 

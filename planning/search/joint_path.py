@@ -99,7 +99,11 @@ class JointPathSearch:
         return model if model.active else None
 
     def prepare(self) -> None:
-        """Syncs the sphere models with the scene (see ``MotionPlanner.prepare``)."""
+        """Syncs the sphere models with the scene (see ``MotionPlanner.prepare``) and packs
+        the compiled search's data."""
+        model = self._compiled_model()
+        if model is not None:
+            model.packed_data()
         self._sphere_model()
         self._refine_model()
 
@@ -225,14 +229,15 @@ class JointPathSearch:
         repair = arguments(fine, opts.validation.repair_step, 0.0)
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
-        if self.fused:
-            result = compiled_rrt.solve(q_start, q_goal, *search, check_ends is not None, fine)
+        if self.fused:  # the kernel data packed: two arrays to pass, not 35
+            packed = (*search[:2], *model.packed_data(), *search[3:])
+            result = compiled_rrt.solve(q_start, q_goal, *packed, check_ends is not None, fine)
             if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
                 check_ends(
                     bool(result[4] & 1) and not self.proves_free(q_start, first=False),
                     bool(result[4] & 2) and not self.proves_free(q_goal, first=False),
                 )  # raises when one collides
-                result = compiled_rrt.solve(q_start, q_goal, *search, False, fine)
+                result = compiled_rrt.solve(q_start, q_goal, *packed, False, fine)
             status, path, how, _, _, bad, unknown, segment = result
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
@@ -258,14 +263,16 @@ class JointPathSearch:
     def _first_failing_segment(self, path, resolution: float, data, checked=None) -> int:
         """The first segment of the path with a sample at ``resolution`` that the spheres
         prove colliding or that Drake finds colliding among those they cannot decide; -1 when
-        none. ``checked``: the spheres' fine check of this path when made already (``solve``)."""
+        none. ``checked``: the spheres' fine check of this path when made already (``solve``).
+        The samples they cannot decide go to the tighter cover, then to Drake."""
         if checked is None:
             checked = compiled_rrt.fine_check(path, resolution, data)[:3]
         bad, unknown, segment = checked
         if bad >= 0:  # only samples before the colliding segment matter
             unknown, segment = unknown[segment < bad], segment[segment < bad]
         if len(unknown):
-            blocked = segment[~self.adapter(resolution).configs_free(unknown)]
+            adapter = self.adapter(resolution)
+            blocked = segment[~adapter.undecided_free(unknown)]
             if len(blocked):
                 return int(blocked.min())
         return int(bad)

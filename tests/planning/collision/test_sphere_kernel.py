@@ -346,3 +346,36 @@ def test_a_changed_kernel_source_empties_the_cache(tmp_path, monkeypatch):
     monkeypatch.setattr(mut.Path, "write_text", read_only)  # the functions are not cached at all
     mut.refresh_cache(module, [source], cache)
     assert isinstance(dispatcher._cache, mut.NullCache)
+
+
+def test_packed_data_unpacks_to_the_same_arrays_in_compiled_code(scene):
+    """``pack`` puts the 35 arrays in two buffers (one typed and unboxed argument each) and
+    ``unpack`` gives them back, views of the same values, shapes and types, the sizes of an
+    empty world's objects (0 rows) included."""
+
+    @njit
+    def roundtrip(floats, ints):
+        return mut.unpack(floats, ints)
+
+    empty = PlanningScene()
+    for name in list(empty.world_objects):
+        empty.remove_object(name)
+    for scene_ in (scene, empty):
+        data = kernel_data(scene_)
+        floats, ints = mut.pack(data)
+        assert floats.dtype == np.float64 and ints.dtype == np.int64
+        back = roundtrip(floats, ints)
+        for name, a, b in zip(mut.KernelData._fields, data, back, strict=True):
+            assert a.dtype == b.dtype and a.shape == b.shape, name
+            np.testing.assert_array_equal(a, b, err_msg=name)
+    assert len(kernel_data(empty).objects) == 0
+    # The packed data classify alike: a compiled scan on the unpacked arrays.
+    qs = random_q(scene, 50, seed=11)
+    data = kernel_data(scene)
+
+    @njit
+    def scan(qs, floats, ints):
+        return mut.prefixes(qs, qs, 1.0, False, mut.unpack(floats, ints))[0]
+
+    expected = mut.prefixes(qs, qs, 1.0, False, data)[0]
+    np.testing.assert_array_equal(scan(qs, *mut.pack(data)), expected)

@@ -166,3 +166,12 @@ def test_held_objects_against_the_arm_agree_with_drake(scene, dut):
     qs = random_q(scene, 200, seed=8)
     state = dut.classify(qs)
     assert not np.any((state == mut.FREE) & ~drake_free(scene, qs))
+
+
+def test_packed_data_is_packed_once_per_change(dut, scene):
+    first = dut.packed_data()
+    assert dut.packed_data() is first  # no change: the same buffers
+    np.testing.assert_array_equal(first[0], mut._kernel.pack(dut.kernel_data())[0])
+    scene.add_box("packed", [0.1, 0.1, 0.1], RigidTransform([0.5, 0.3, 0.3]))
+    again = dut.packed_data()
+    assert again is not first and len(again[0]) > len(first[0])  # one more object's row

@@ -205,7 +205,7 @@ def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
 def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     scene, data, limits, ends
 ):
-    args = (*limits, data, 0.1, 1.0, 0.05, 50_000, 20)
+    args = (*limits, *mut.pack(data), 0.1, 1.0, 0.05, 50_000, 20)
     tail = (0.0, True, np.inf, 1.0)
     status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
         *ends, *args, mut.seed_state(3), *tail, True, FINE

@@ -101,7 +101,8 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
     def through_the_box(q_a, q_b, *args):
         result = solve(q_a, q_b, *args)
         straight = np.vstack([q_a, q_b])
-        checked = mut.compiled_rrt.fine_check(straight, args[-1], args[2])[:3]
+        data = mut.compiled_rrt.unpack(args[2], args[3])  # packed: floats, ints
+        checked = mut.compiled_rrt.fine_check(straight, args[-1], data)[:3]
         return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
@@ -162,7 +163,7 @@ def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
     real = mut.compiled_rrt.solve
 
     def recorded(*args):
-        budgets.append(args[8])  # max_checks
+        budgets.append(args[9])  # max_checks (after the packed data's two arrays)
         return real(*args)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", recorded)
