@@ -110,7 +110,9 @@ class MotionPlanner:
         """Brings the planner's collision models up to date with the scene now. Requests do it
         themselves when the scene has changed; calling it after a change keeps that work (the
         world's shapes re-read into the sphere model) out of the next request, as a scene
-        update does in MoveIt."""
+        update does in MoveIt. The tighter cover (``spheres.refine_slack``) is remade here only
+        after held objects or finger positions change (~45 ms); until then requests leave what
+        the first cover cannot decide to Drake."""
         self._search.prepare()
 
     @property

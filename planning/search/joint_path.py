@@ -77,7 +77,7 @@ class JointPathSearch:
             resolution,
             slack=opts.slack,
             fallback_after=after,
-            refine_slack=opts.refine_slack,
+            refine_slack=opts.refine_slack if self._refine_model() is not None else None,
         )
 
     def _sphere_model(self):
@@ -89,13 +89,17 @@ class JointPathSearch:
         model = sphere_model(self._scene, opts.slack)
         return model if model.active else None
 
-    def _refine_model(self):
+    def _refine_model(self, rebuild: bool = False):
         """The tighter cover that decides what the first cannot (``spheres.refine_slack``),
-        when enabled and able to answer, else None."""
+        when enabled and able to answer, else None. Its robot part is remade in ``prepare``
+        (``rebuild``) only: when held objects, allowed pairs or fingers changed since, a
+        request lets Drake decide instead of spending ~45 ms remaking it."""
         opts = self._options.spheres
         if not (opts.enabled and opts.refine_slack):
             return None
         model = sphere_model(self._scene, opts.refine_slack)
+        if not model.sync(rebuild_robot=rebuild):
+            return None
         return model if model.active else None
 
     def prepare(self) -> None:
@@ -105,7 +109,7 @@ class JointPathSearch:
         if model is not None:
             model.packed_data()
         self._sphere_model()
-        self._refine_model()
+        self._refine_model(rebuild=True)
 
     def warm_up(self) -> None:
         """Has the compiled search ready (compiled, or loaded from numba's cache): once, when

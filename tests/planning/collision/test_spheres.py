@@ -175,3 +175,23 @@ def test_packed_data_is_packed_once_per_change(dut, scene):
     scene.add_box("packed", [0.1, 0.1, 0.1], RigidTransform([0.5, 0.3, 0.3]))
     again = dut.packed_data()
     assert again is not first and len(again[0]) > len(first[0])  # one more object's row
+
+
+def test_a_sync_told_not_to_remake_the_robot_part_says_when_it_is_out_of_date(scene, dut):
+    """``sync(rebuild_robot=False)`` follows the world's objects (a cheap change) but leaves the
+    model as it is, and says so, when held objects changed; a full sync then catches up."""
+    q = scene.model.named_configurations["ready"]
+    assert dut.sync(rebuild_robot=False)
+    scene.add_box("seen", [0.1, 0.1, 0.1], RigidTransform([0.5, -0.3, 0.3]))
+    assert dut.sync(rebuild_robot=False) and "seen" in scene.world_objects
+    before = dut.kernel_data()
+    assert len(before.objects) == len(scene.world_objects)
+    scene.attach_new(
+        type(scene.world_objects["table"])(
+            "rod", "cylinder", (0.02, 2.0), RigidTransform([0.0, 0.0, 0.1])
+        )
+    )
+    assert not dut.sync(rebuild_robot=False)
+    assert not dut.sync(rebuild_robot=False)  # the same version: no second look
+    assert dut.sync()  # remade: the held rod through the table collides
+    assert dut.classify(q[None])[0] != mut.FREE
