@@ -561,9 +561,10 @@ def solve(
     """A whole request in one call: with ``check_ends``, the start and the goal are classified
     first; then ``plan`` (same arguments, but the kernel data packed in two buffers:
     ``sphere_kernel.pack``), and the path's ``_fine_check`` at ``fine_step`` (rad; none when
-    0). One call instead of three, and two arrays instead of 35: each call from Python types
-    and unboxes its arrays, KernelData's costing 6 us when the caches are warm and 40-110 us
-    right after a scene set-up has evicted them (measured on this project's 2-core VM).
+    0). One call instead of four (start, goal, search, fine check), and two arrays instead of
+    35: each call from Python types and unboxes its arrays, KernelData's costing 6 us when the
+    caches are warm and 40-110 us right after a scene set-up has evicted them (measured on this
+    project's 2-core VM).
 
     Returns:
         (status, path, how, checks, unproven, bad, unknown, segment): ``plan``'s four (with
