@@ -105,10 +105,11 @@ class JointPathSearch:
     def prepare(self) -> None:
         """Syncs the sphere models with the scene (see ``MotionPlanner.prepare``) and packs
         the compiled search's data."""
-        model = self._compiled_model()
+        model = self._compiled_model()  # the synced sphere model, when the compiled search runs
         if model is not None:
             model.packed_data()
-        self._sphere_model()
+        else:
+            self._sphere_model()
         self._refine_model(rebuild=True)
 
     def warm_up(self) -> None:
@@ -210,12 +211,13 @@ class JointPathSearch:
         budget = max(1, min(opts.spheres.drake_fallback_after, int(left / _CHECK_S)))
         spheres, fine = opts.spheres, opts.validation.resolution
 
-        def arguments(edge_step, step, anchor_radius):
+        def arguments(edge_step, step, anchor_radius, kernel=(data,)):
             # By position: numba's dispatch of keyword arguments costs ~0.5 ms a call.
+            # ``kernel``: the KernelData (``plan``) or its two packed buffers (``solve``).
             return (
                 lower,
                 upper,
-                data,
+                *kernel,
                 edge_step,
                 step,
                 opts.rrt.goal_bias,
@@ -234,7 +236,12 @@ class JointPathSearch:
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
         if self.fused:  # the kernel data packed: two arrays to pass, not 35
-            packed = (*search[:2], *model.packed_data(), *search[3:])
+            packed = arguments(
+                spheres.search_resolution,
+                opts.rrt.step,
+                spheres.anchor_radius,
+                model.packed_data(),
+            )
             result = compiled_rrt.solve(q_start, q_goal, *packed, check_ends is not None, fine)
             if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
                 check_ends(
