@@ -119,9 +119,15 @@ class ValidationOptions:
     """The fine collision check of every returned path, and the repair of failing segments."""
 
     resolution: float = 0.01  # rad between fine collision checks of every returned path
-    max_repairs: int = 3  # segments re-planned with fine edge checks when validation fails
+    max_repairs: int = 3  # segments re-planned when validation fails
     repair_timeout: float = 0.5  # s per segment repair; then the whole path is re-planned finely
     repair_step: float = 0.25  # rad, RRT-Connect extension when repairing (tight spots)
+    # rad between collision samples of the compiled search's repair edges (the repaired path is
+    # checked at ``resolution`` again, and repaired anew if it fails). Measured on the 50 MBM
+    # paths whose fine check finds a sphere collision, a repair each: 0.03 took 0.42x the
+    # checks of 0.01 (66.6k against 160.1k) and repaired all 50 (0.01 left two to the Python
+    # pipeline), the median path no longer (5.08 against 5.10 rad).
+    repair_resolution: float = 0.03
 
     def check(self, prefix: str = "validation") -> None:
         """Raises ValueError naming the first field out of range."""
@@ -130,6 +136,9 @@ class ValidationOptions:
         _count(self.max_repairs, f"{prefix}.max_repairs", least=0)
         _positive(self.repair_timeout, f"{prefix}.repair_timeout")
         _positive(self.repair_step, f"{prefix}.repair_step")
+        field = f"{prefix}.repair_resolution"
+        ok = self.repair_resolution > 0.0 and math.isfinite(self.repair_resolution)
+        _require(ok, field, "finite and > 0 rad", self.repair_resolution)
 
 
 @dc.dataclass

@@ -231,8 +231,9 @@ class JointPathSearch:
             )
 
         search = arguments(spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
-        # Repairs re-plan a segment on fine edges, the spheres alone deciding (nothing to ask).
-        repair = arguments(fine, opts.validation.repair_step, 0.0)
+        # Repairs re-plan a segment on finer edges (``validation.repair_resolution``), the spheres
+        # alone deciding (nothing to ask); the fine check then looks at the result again.
+        repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
         if self.fused:  # the kernel data packed: two arrays to pass, not 35

@@ -33,7 +33,11 @@ def test_defaults_are_the_documented_values():
     )
     assert o.shortcut == mut.ShortcutOptions(iterations=50, time_fraction=0.2)
     assert o.validation == mut.ValidationOptions(
-        resolution=0.01, max_repairs=3, repair_timeout=0.5, repair_step=0.25
+        resolution=0.01,
+        max_repairs=3,
+        repair_timeout=0.5,
+        repair_step=0.25,
+        repair_resolution=0.03,
     )
     assert o.pose == mut.PoseGoalOptions(ik_solutions=4)
     assert o.cartesian == mut.CartesianOptions(step=0.005, rotation_step=0.05, jump_threshold=0.2)
@@ -129,6 +133,9 @@ BAD_VALUES = [
     ("validation", "max_repairs", -1),
     ("validation", "repair_timeout", 0.0),
     ("validation", "repair_step", 0.0),
+    ("validation", "repair_resolution", 0.0),
+    ("validation", "repair_resolution", float("inf")),
+    ("validation", "repair_resolution", float("nan")),
     ("pose", "ik_solutions", 0),
     ("cartesian", "step", 0.0),
     ("cartesian", "rotation_step", 0.0),

@@ -106,10 +106,19 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
         checked = mut.compiled_rrt.fine_check(straight, args[-1], data)[:3]
         return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
+    plan, edge_steps = mut.compiled_rrt.plan, []
+
+    def recorded(q_a, q_b, lower, upper, data, edge_step, *rest):
+        edge_steps.append(edge_step)
+        return plan(q_a, q_b, lower, upper, data, edge_step, *rest)
+
     monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
+    monkeypatch.setattr(mut.compiled_rrt, "plan", recorded)
     monkeypatch.setattr(mut, "rrt_connect", lambda *a, **k: pytest.fail("Python RRT ran"))
     path, how = dut.find(*ends, deadline())
     assert how == "rrt_connect+repaired" and len(path) > 2
+    # The repair searched on edges at repair_resolution; the fine check had the last word.
+    assert edge_steps and set(edge_steps) == {MotionPlannerOptions().validation.repair_resolution}
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
 
 
