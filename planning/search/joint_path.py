@@ -258,17 +258,22 @@ class JointPathSearch:
         name = "straight" if how == 0 else "rrt_connect"
         if status != compiled_rrt.FOUND:
             return None, "rrt_connect", None
+        # Segments before ``verified`` passed the fine check (Drake deciding what the spheres
+        # could not): after a repair, only the new piece and what follows are checked.
+        verified = 0
         for attempt in range(opts.validation.max_repairs + 1):
-            bad = self._first_failing_segment(path, fine, data, checked)
+            bad = self._first_failing_segment(path[verified:], fine, data, checked)
             checked = None
             if bad < 0:
                 return path, name, None
+            bad += verified
             if attempt == opts.validation.max_repairs:
                 break
             status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair)
             if status != compiled_rrt.FOUND:
                 break
             path = np.vstack([path[:bad], piece, path[bad + 2 :]])
+            verified = bad
             name = "rrt_connect+repaired"
         return None, name, path
 

@@ -122,6 +122,36 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
 
 
+def test_after_a_repair_only_the_new_piece_and_what_follows_are_checked_again(
+    scene, ends, monkeypatch
+):
+    """The segments before a repaired one passed the fine check, Drake deciding what the
+    spheres could not: the next round checks from the repaired segment's start on, so those
+    samples are not sent to Drake twice."""
+    dut = mut.JointPathSearch(scene, MotionPlannerOptions())
+    start, goal = ends
+    middle = [start + 0.1 * E[1], start + 0.2 * E[1]]
+    searched = np.vstack([start, *middle, goal])
+    piece = np.vstack([middle[0], middle[0] + 0.05 * E[2], middle[1]])
+    seen = []
+
+    def failing(path, resolution, data, checked=None):
+        seen.append(path.copy())
+        return 1 if len(seen) == 1 else -1  # the segment middle[0] -> middle[1], once
+
+    def found(q_a, q_b, *args):  # the solve's 8 outputs, its fine check left to ``failing``
+        return (mut.compiled_rrt.FOUND, searched, 1, 0, 0, -1, np.empty((0, 7)), np.empty(0))
+
+    monkeypatch.setattr(mut.compiled_rrt, "solve", found)
+    monkeypatch.setattr(mut.compiled_rrt, "plan", lambda *a: (mut.compiled_rrt.FOUND, piece, 1, 0))
+    monkeypatch.setattr(dut, "_first_failing_segment", failing)
+    path, how = dut.find(start, goal, deadline())
+    assert how == "rrt_connect+repaired"
+    np.testing.assert_array_equal(path, np.vstack([start, piece, goal]))
+    np.testing.assert_array_equal(seen[0], searched)
+    np.testing.assert_array_equal(seen[1], np.vstack([piece, goal]))  # from the repair on
+
+
 @pytest.mark.parametrize("fused", [True, False], ids=["one-call", "separate-calls"])
 def test_the_ends_are_checked_in_the_search_and_drake_decides_the_unproven(
     scene, ends, fused, monkeypatch
