@@ -230,19 +230,14 @@ class JointPathSearch:
                 opts.rrt.dynamic_domain_min,
             )
 
-        search = arguments(spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
+        search = (spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
         # Repairs re-plan a segment on finer edges (``validation.repair_resolution``), the spheres
         # alone deciding (nothing to ask); the fine check then looks at the result again.
         repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
         if self.fused:  # the kernel data packed: two arrays to pass, not 35
-            packed = arguments(
-                spheres.search_resolution,
-                opts.rrt.step,
-                spheres.anchor_radius,
-                model.packed_data(),
-            )
+            packed = arguments(*search, model.packed_data())
             result = compiled_rrt.solve(q_start, q_goal, *packed, check_ends is not None, fine)
             if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
                 check_ends(
@@ -253,7 +248,7 @@ class JointPathSearch:
             status, path, how, _, _, bad, unknown, segment = result
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
-            status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *search)
+            status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *arguments(*search))
             checked = None
         name = "straight" if how == 0 else "rrt_connect"
         if status != compiled_rrt.FOUND:
