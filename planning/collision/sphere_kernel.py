@@ -601,7 +601,7 @@ def edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius
 
 # ------------------------------------------------------------------- compile note ----
 COMPILE_NOTE = (
-    "note: compiling the collision kernel and planner once for this machine (1 to 2 minutes)..."
+    "note: compiling the collision kernel and planner once for this machine (2 to 4 minutes)..."
 )
 _announce_lock = threading.Lock()
 _announce_done = False  # announce_compile has looked, in this process
