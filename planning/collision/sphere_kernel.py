@@ -27,7 +27,9 @@ forty-odd arrays field by field, 12 % of the search's time (paired runs; the fir
 small helpers as well gained 2-3 % more for a first compile of 162 s: not done. The sines and
 cosines come from ``planning.collision.trig``, all of a configuration's in one loop that
 vectorises; the groups' centres are computed when a test first needs them (most are not).
-Both, side by side on all of MBM: per-problem median 0.925x, the same paths.
+With the kinematics and the centres written out (no tuple picked by index, no call per point):
+per-problem median 0.979x on all of MBM, the same paths (``benchmarks/planner_ab.py`` against
+26bf203).
 
 Compiled once per machine (``cache=True`` keeps the machine code beside this file, or in
 numba's cache folder when that is read-only): the first call in a fresh install takes about
