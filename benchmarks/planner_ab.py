@@ -45,8 +45,6 @@ def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
     """Reads problem indices on stdin and answers each with a JSON line: [index, time (s) or
     None when the problem is invalid, path length (rad) or None when it failed, family]."""
     sys.path.insert(0, str(checkout))
-    import dataclasses as dc
-
     import planning
     from planning.benchmark import _load, problems_folder
     from planning.errors import PlanningError
@@ -55,16 +53,10 @@ def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
 
     if not Path(planning.__file__).resolve().is_relative_to(checkout.resolve()):
         raise SystemExit(f"planning came from {planning.__file__}, not from {checkout}")
-    options = MotionPlannerOptions()
     try:
-        for setting in settings:
-            name, value = setting.split("=", 1)
-            section, field = name.split(".")
-            part = getattr(options, section)
-            kind = type(getattr(part, field))
-            options = dc.replace(options, **{section: dc.replace(part, **{field: kind(value)})})
-    except (AttributeError, TypeError, ValueError) as e:  # an unknown name or a bad value
-        print(json.dumps(["error", f"--set {setting}: {e}"]), flush=True)
+        options = with_settings(MotionPlannerOptions(), settings)
+    except ValueError as e:
+        print(json.dumps(["error", str(e)]), flush=True)
         return
     scene = planning.PlanningScene()
     planner = MotionPlanner(scene, options)
@@ -86,6 +78,33 @@ def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
             length = None
         elapsed = time.perf_counter() - start
         print(json.dumps([int(line), elapsed, length, problem.family]), flush=True)
+
+
+def with_settings(options, settings: list[str]):
+    """``options`` (``MotionPlannerOptions``) with each "section.field=value" of ``settings``
+    set, the value converted to the field's type ("true"/"false" for a bool), then checked.
+
+    Raises:
+        ValueError: naming the setting, for an unknown name or a value that does not convert
+            or that the options reject.
+    """
+    import dataclasses as dc
+
+    for setting in settings:
+        try:
+            name, value = setting.split("=", 1)
+            section, field = name.split(".")
+            part = getattr(options, section)
+            kind = type(getattr(part, field))
+            if kind is bool:  # bool("false") is True
+                if value.lower() not in ("true", "false"):
+                    raise ValueError(f"expected true or false, got {value!r}")
+                value = value.lower() == "true"
+            options = dc.replace(options, **{section: dc.replace(part, **{field: kind(value)})})
+            options.check()  # out-of-range values name their field
+        except (AttributeError, TypeError, ValueError) as e:
+            raise ValueError(f"--set {setting}: {e}") from e
+    return options
 
 
 # -------------------------------------------------------------------------- driver ----

@@ -29,6 +29,18 @@ def test_the_report_gives_medians_ratios_and_families():
     assert "box" in report and "cage" in report
 
 
+def test_settings_change_a_section_field_with_its_type():
+    from planning.motion_planner import MotionPlannerOptions
+
+    base = MotionPlannerOptions()
+    options = mut.with_settings(base, ["shortcut.iterations=30", "rrt.balance=false"])
+    assert options.shortcut.iterations == 30 and options.rrt.balance is False
+    assert options.rrt.step == base.rrt.step
+    for bad in ("shortcut.nope=1", "shortcut.iterations=x", "rrt.balance=maybe", "rrt.step=-1"):
+        with pytest.raises(ValueError, match="--set"):
+            mut.with_settings(base, [bad])
+
+
 @pytest.mark.parametrize(
     "argv",
     [
