@@ -308,6 +308,16 @@ def _points(T, steps, p_B, out):
         out[k, 2] = X[2, 0] * x + X[2, 1] * y + X[2, 2] * z + X[2, 3]
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _box_gap2(boxes, o, x, y, z):
+    """Squared distance from the point (x, y, z) to the axis-aligned box of object o, m^2 (0
+    inside): ``boxes`` is (6, O), the lower corners' coordinates, then the upper ones'."""
+    gx = max(boxes[0, o] - x, x - boxes[3, o], 0.0)
+    gy = max(boxes[1, o] - y, y - boxes[4, o], 0.0)
+    gz = max(boxes[2, o] - z, z - boxes[5, o], 0.0)
+    return gx * gx + gy * gy + gz * gz
+
+
 @njit(cache=True, _nrt=False)
 def _distance2(x, y, z, obj):
     """Squared distance from the point (x, y, z) to the object of row ``obj``, m^2 (0 inside)."""
@@ -401,10 +411,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
             y = bodies[b, 1]
             z = bodies[b, 2]
             for o in range(n_obj):  # the boxes' corners by coordinate: a loop that vectorises
-                gx = max(boxes[0, o] - x, x - boxes[3, o], 0.0)
-                gy = max(boxes[1, o] - y, y - boxes[4, o], 0.0)
-                gz = max(boxes[2, o] - z, z - boxes[5, o], 0.0)
-                gaps[o] = gx * gx + gy * gy + gz * gz
+                gaps[o] = _box_gap2(boxes, o, x, y, z)
             count = 0
             far2 = np.inf
             reach2 = d.body_reach[b] * d.body_reach[b]
@@ -447,10 +454,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
         close2 = np.inf
         for i in range(count):
             o = near[b, i]
-            gx = max(boxes[0, o] - x, x - boxes[3, o], 0.0)
-            gy = max(boxes[1, o] - y, y - boxes[4, o], 0.0)
-            gz = max(boxes[2, o] - z, z - boxes[5, o], 0.0)
-            box2 = gx * gx + gy * gy + gz * gz
+            box2 = _box_gap2(boxes, o, x, y, z)
             close2 = min(close2, box2 if box2 >= reach2 else _distance2(x, y, z, objects[o]))
         if close2 >= reach2:
             if lam[b] > 0.0:
