@@ -29,7 +29,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -43,11 +42,11 @@ READY = "ready"
 # -------------------------------------------------------------------------- worker ----
 def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
     """Reads problem indices on stdin and answers each with a JSON line: [index, time (s) or
-    None when the problem is invalid, path length (rad) or None when it failed, family]."""
+    None when the problem is invalid, path length (rad) or None when it failed, family]. Each
+    problem is ``planning.benchmark.run_problem``'s, timed as that benchmark times it."""
     sys.path.insert(0, str(checkout))
     import planning
-    from planning.benchmark import _load, problems_folder
-    from planning.errors import PlanningError
+    from planning.benchmark import problems_folder, run_problem
     from planning.io import mbm
     from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 
@@ -64,20 +63,9 @@ def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
     print(json.dumps([READY, [[p.family, p.number] for p in problems]]), flush=True)
     for line in sys.stdin:
         problem = problems[int(line)]
-        q_start, q_goal = _load(scene, problem)
-        ends = (q_start, q_goal)
-        if not all(scene.in_joint_limits(q, 1e-6) and scene.is_collision_free(q) for q in ends):
-            print(json.dumps([int(line), None, None, problem.family]), flush=True)
-            continue
-        planner.prepare()
-        start = time.perf_counter()
-        try:
-            path, _ = planner.plan_path(q_start, q_goal, timeout=timeout)
-            length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-        except PlanningError:
-            length = None
-        elapsed = time.perf_counter() - start
-        print(json.dumps([int(line), elapsed, length, problem.family]), flush=True)
+        row = run_problem(scene, planner, problem, timeout)
+        elapsed = row["time_s"] if row["valid"] else None
+        print(json.dumps([int(line), elapsed, row["path_length"], problem.family]), flush=True)
 
 
 def with_settings(options, settings: list[str]):
