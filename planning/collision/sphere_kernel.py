@@ -580,9 +580,25 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
         n[k] = max(1, int(np.ceil(np.sqrt(length) / step))) if np.isfinite(length) else 1
     unknown_edge = np.empty(n.sum(), dtype=np.int64)
     unknown_local = np.empty(n.sum(), dtype=np.int64)
-    n_unknown = 0
     q = np.empty(q_a.shape[1])
-    for k in range(count):
+    n_unknown = _prefix_samples(
+        q_a, q_b, n, stop_at_unknown, d, work, still, q, first, unknown_edge, unknown_local
+    )
+    return first, n, unknown_edge[:n_unknown], unknown_local[:n_unknown]
+
+
+@njit(cache=True, _nrt=False)
+def _prefix_samples(
+    q_a, q_b, n, stop_at_unknown, d, work, still, q, first, unknown_edge, unknown_local
+):
+    """``prefixes``' loop over the samples, filling ``first``, ``unknown_edge`` and
+    ``unknown_local`` and returning how many UNKNOWN samples it found. A function of its own,
+    compiled without reference counting: inside ``prefixes``, which allocates and so counts
+    references, every array of ``d`` and ``work`` was counted in and out around each inlined
+    ``_classify_one``, which made a check 2.6 times as long (0.86 against 2.2 us a
+    configuration on MBM scenes, this project's 2-core VM)."""
+    n_unknown = 0
+    for k in range(len(q_a)):
         first[k] = n[k]
         for i in range(n[k]):
             t = (i + 1) / n[k]
@@ -596,7 +612,7 @@ def prefixes(q_a, q_b, step, stop_at_unknown, d):
                 unknown_edge[n_unknown] = k
                 unknown_local[n_unknown] = i
                 n_unknown += 1
-    return first, n, unknown_edge[:n_unknown], unknown_local[:n_unknown]
+    return n_unknown
 
 
 @njit(cache=True, _nrt=False)

@@ -371,8 +371,11 @@ def _shortcut(path, iterations, edge_step, d, rng, scratch):
             gap += (q_b[j] - q_a[j]) ** 2
         if np.sqrt(gap) >= s_b - s_a - 0.01:
             continue
-        # q_a lies between the samples of a checked segment: check it, then the shortcut.
-        if not _free(q_a, q_a, edge_step, d, scratch) or not _free(q_a, q_b, edge_step, d, scratch):
+        # q_a and q_b lie on checked segments, between their samples: checked (to become
+        # waypoints) only once the samples between them are free, most shortcuts failing first.
+        if not _free(q_a, q_b, edge_step, d, scratch, True):
+            continue
+        if not _free(q_a, q_a, edge_step, d, scratch) or not _free(q_b, q_b, edge_step, d, scratch):
             continue
         out = np.empty((i + 1 + 2 + len(path) - k - 1, path.shape[1]))
         out[: i + 1] = path[: i + 1]
