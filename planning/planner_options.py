@@ -240,12 +240,19 @@ class SphereCheckOptions:
     # of MBM's paths: 0.005 (1163 spheres) proves 55 % of those samples free, 0.002 (5105
     # spheres) 59 %, where Drake costs ~0.2 ms a configuration.
     refine_slack: float = 0.005
+    # In the compiled search, the ends and fine-check samples the sphere cover cannot decide go
+    # to the robot's exact convex shapes first (planning.collision.hull_kernel: a separating
+    # plane with 0.1 mm to spare proves a pair apart), Drake only for what those cannot prove.
+    # Measured on MBM scenes: 99 % of the samples Drake finds free are proven, at ~10 us each
+    # against ~0.27 ms for Drake's check.
+    hull_proofs: bool = True
 
     def check(self, prefix: str = "spheres") -> None:
         """Raises ValueError naming the first field out of range."""
         _flag(self.enabled, f"{prefix}.enabled")
         _positive(self.slack, f"{prefix}.slack")
         _count(self.drake_fallback_after, f"{prefix}.drake_fallback_after", least=0)
+        _flag(self.hull_proofs, f"{prefix}.hull_proofs")
         _positive(self.search_resolution, f"{prefix}.search_resolution")
         _require(
             self.anchor_radius >= 0.0 and math.isfinite(self.anchor_radius),

@@ -86,6 +86,30 @@ def cover_shape(shape, X_BG, slack: float, *, scaled: bool = False) -> SphereSet
     return cover.transformed(X_BG.rotation().matrix(), X_BG.translation())
 
 
+def shape_hull(shape, X_BG) -> tuple[np.ndarray, float]:
+    """(vertices (K, 3) in frame B, radius, m): a Drake shape posed at X_BG as the convex hull
+    of the vertices swept by a ball of that radius, which contains it (``hull_kernel``): a
+    ``Convex`` or ``Mesh`` as the hull Drake checks, a box as its corners, a cylinder as the
+    prism around it (``shape_polytope``), a sphere as its centre and radius."""
+    v, _, radius, _ = shape_polytope(shape)
+    swept = 0.0
+    if v is None:
+        v, swept = np.zeros((1, 3)), float(radius)
+    R, p = X_BG.rotation().matrix(), X_BG.translation()
+    return np.ascontiguousarray(np.asarray(v, dtype=float) @ R.T + p), swept
+
+
+def robot_hulls(plant, inspector, bodies) -> dict[int, list[tuple[np.ndarray, float]]]:
+    """Each body's collision shapes as ``shape_hull``s in its frame (body index -> list)."""
+    out = {}
+    for body in bodies:
+        geometries = plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(body)))
+        out[int(body)] = [
+            shape_hull(inspector.GetShape(g), inspector.GetPoseInFrame(g)) for g in geometries
+        ]
+    return out
+
+
 def robot_spheres(plant, inspector, bodies, slack: float) -> dict[int, SphereSet]:
     """Covers the collision geometry of each body (body index -> spheres in its frame),
     reading the cache or writing it.

@@ -33,11 +33,13 @@ import numpy as np
 from pydrake.multibody.tree import BodyIndex
 
 from planning.collision import sphere_kernel as _kernel
+from planning.collision.hull_kernel import MARGIN as _HULL_MARGIN
+from planning.collision.hull_kernel import HullData
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics, fold_fixed_steps, fold_points
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
-from planning.collision.sphere_robot import held_cover, robot_spheres
+from planning.collision.sphere_robot import held_cover, robot_hulls, robot_spheres, shape_hull
 from planning.model.layout import NUM_ARM_JOINTS
 from planning.model.panda import ATTACHMENT_BODY
 
@@ -78,7 +80,8 @@ class SphereCollisionModel:
         self._held_cache: dict[tuple, SphereSet] = {}
         self._groups_cache: dict[int, tuple] = {}  # body -> _body_groups
         self._signature = self._held_signature = self._robot_signature = self._version = None
-        self._packed = None  # (the KernelData, its packed buffers)
+        self._packed = {}  # "kernel" or "hulls" -> (the data, its packed buffers)
+        self._alive = {}  # signature name -> the objects it names (see ``sync``)
         self._stale_version = None  # the scene's version whose robot part sync left undone
         self.supported = True
         try:
@@ -89,6 +92,7 @@ class SphereCollisionModel:
                 if plant.GetCollisionGeometriesForBody(plant.get_body(b))
             ]
             self._robot = robot_spheres(plant, query.inspector(), bodies, slack)
+            self._hulls = robot_hulls(plant, query.inspector(), bodies)
             self._bodies = [*self._robot, self._attachment]
             self._unfiltered = _unfiltered_in_model(plant, query.inspector(), self._bodies)
             self._kin = BatchedKinematics(plant, self._bodies)
@@ -119,11 +123,15 @@ class SphereCollisionModel:
             return False
         world, held = scene.world_objects, scene.attached_objects
         filtered = scene.checker.GetFilteredCollisionMatrix()
+        # Objects by identity; each signature kept holds on to its objects too (``_alive``), so
+        # that no new object can take the id of one it names (say, an object removed and a new
+        # one attached under its name between two syncs).
         signature = (
             tuple((n, id(o)) for n, o in world.items()),
             (tuple((n, id(o)) for n, o in held.items()), filtered.tobytes()),
             tuple(scene.finger_positions),
         )
+        objects = (tuple(world.values()), tuple(held.values()))
         if not rebuild_robot and signature[1:] != self._robot_signature:
             self._stale_version = version  # the robot's part is out of date at this version
             return False
@@ -131,6 +139,7 @@ class SphereCollisionModel:
         if signature == self._signature:
             return True
         self._signature = signature
+        self._alive["all"] = objects
         self._template = scene.full_q(np.zeros(NUM_ARM_JOINTS))
         self._arm = scene.model.arm_indices
         self._objects_ok = all(o.shape in ("box", "cylinder", "sphere") for o in world.values())
@@ -140,9 +149,11 @@ class SphereCollisionModel:
                 self._filtered = filtered
                 self._build_robot(held)
                 self._held_signature = signature[1]
+                self._alive["held"] = objects[1]
             if signature[1:] != self._robot_signature:  # the robot's part: held objects, fingers
                 self._robot_data = self._robot_kernel_arrays()
                 self._robot_signature = signature[1:]
+                self._alive["robot"] = objects[1]
             self._data = KernelData(**self._robot_data, objects=_primitives(world.values()))
         return True
 
@@ -161,6 +172,7 @@ class SphereCollisionModel:
         point_norm = self._point_norm + shift[arrays["body_step"]]
         for steps, points in _FOLDED:
             arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
+        self._hull_data = self._folded_hulls(offsets)
         parent, kind, q_index, terms = tree
         return dict(
             parent=parent,
@@ -172,6 +184,54 @@ class SphereCollisionModel:
             **arrays,
             speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
             **{name: np.sqrt(np.maximum(arrays[squared], 0.0)) for name, squared in _ROOTS.items()},
+        )
+
+    def _folded_hulls(self, offsets) -> HullData:
+        """``HullData`` of the shapes ``_build_robot`` listed, on the folded tree's steps."""
+        raw = self._hull_raw
+        counts = np.diff(raw["vert_start"])
+        _, vert = fold_points(offsets, np.repeat(raw["geom_step"], counts), raw["vert"])
+        geom_step, centre = fold_points(offsets, raw["geom_step"], raw["geom_centre"])
+        fields = dict(raw, geom_step=geom_step, vert=vert, geom_centre=centre)
+        return HullData(**{k: np.ascontiguousarray(v) for k, v in fields.items()})
+
+    def _build_hulls(self, present, held, step, slot) -> None:
+        """Lists the robot's collision shapes (held objects included) for ``HullData``: each
+        shape's step, vertices, swept radius and bounding sphere, its clearance to prove to the
+        world (-1: filtered), and the shape pairs of the body pairs the checker checks."""
+        shapes = {b: list(self._hulls.get(b, [])) for b in present}
+        if held:
+            shapes[self._attachment] = [shape_hull(o.drake_shape(), o.X_PO) for o in held.values()]
+        geom_step, verts, radius, centre, bound, world, owner = [], [], [], [], [], [], []
+        for b in present:
+            for v, r in shapes[b]:
+                c = v.mean(axis=0)
+                geom_step.append(step[slot[b]])
+                verts.append(v)
+                radius.append(r)
+                centre.append(c)
+                bound.append(float(np.linalg.norm(v - c, axis=1).max()) + r)
+                pad = max(self._padding[b, self._world], 0.0) + _HULL_MARGIN
+                world.append(pad if self._filtered[b, self._world] == 0 else -1.0)
+                owner.append(b)
+        owner = np.array(owner, dtype=np.int64)
+        pairs, gaps = [], []
+        for a, b in sorted(self._checked_body_pairs(present)):
+            gap = max(self._padding[a, b], 0.0) + _HULL_MARGIN
+            for g in np.flatnonzero(owner == a):
+                for e in np.flatnonzero(owner == b):
+                    pairs.append((g, e))
+                    gaps.append(gap)
+        self._hull_raw = dict(
+            geom_step=np.array(geom_step, dtype=np.int64),
+            vert_start=np.r_[0, np.cumsum([len(v) for v in verts])].astype(np.int64),
+            vert=np.vstack(verts) if verts else np.zeros((0, 3)),
+            geom_radius=np.array(radius, dtype=float),
+            geom_centre=np.array(centre, dtype=float).reshape(-1, 3),
+            geom_bound=np.array(bound, dtype=float),
+            geom_world=np.array(world, dtype=float),
+            pair=np.array(pairs, dtype=np.int64).reshape(-1, 2),
+            pair_gap=np.array(gaps, dtype=float),
         )
 
     def _build_robot(self, held) -> None:
@@ -205,6 +265,7 @@ class SphereCollisionModel:
         group_radius = np.array([r for _, r in bounds])
         group_body = np.array(group_body, dtype=np.int64)
         step = self._kin.out  # kinematic step of each of self._bodies
+        self._build_hulls(present, held, step, slot)
         members = np.zeros((len(groups), _GROUP), dtype=np.int64)
         for g, (_, m) in enumerate(groups):
             members[g, : len(m)] = m
@@ -340,10 +401,25 @@ class SphereCollisionModel:
 
     def packed_data(self) -> tuple[np.ndarray, np.ndarray]:
         """``kernel_data`` in two buffers (``sphere_kernel.pack``), packed once per change."""
-        data = self.kernel_data()
-        if self._packed is None or self._packed[0] is not data:
-            self._packed = (data, _kernel.pack(data))
-        return self._packed[1]
+        return self._packed_once("kernel", self.kernel_data())
+
+    def _packed_once(self, name: str, data) -> tuple[np.ndarray, np.ndarray]:
+        """``sphere_kernel.pack(data)``, remade only when ``data`` is another object than the
+        one packed under ``name`` last."""
+        packed = self._packed.get(name)
+        if packed is None or packed[0] is not data:
+            packed = self._packed[name] = (data, _kernel.pack(data))
+        return packed[1]
+
+    def hull_data(self) -> HullData:
+        """The robot's exact collision shapes (``hull_kernel``), in sync with the scene
+        (``active`` only); read with ``kernel_data``'s kinematics and objects."""
+        self.sync()
+        return self._hull_data
+
+    def packed_hulls(self) -> tuple[np.ndarray, np.ndarray]:
+        """``hull_data`` in two buffers (``sphere_kernel.pack``), packed once per change."""
+        return self._packed_once("hulls", self.hull_data())
 
     @property
     def sphere_bodies(self) -> np.ndarray:

@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from planning.collision import sphere_batch, sphere_kernel, trig
+from planning.collision import hull_kernel, sphere_batch, sphere_kernel, trig
+from planning.collision.hull_kernel import hull_free, hull_scratch, unpack_hulls
 from planning.collision.sphere_batch import FULL, classify_batch
 from planning.collision.sphere_kernel import (
     COLLIDING,
@@ -549,6 +550,8 @@ def solve(
     upper,
     floats,
     ints,
+    hull_floats,
+    hull_ints,
     edge_step,
     step,
     goal_bias,
@@ -565,10 +568,13 @@ def solve(
     """A whole request in one call: with ``check_ends``, the start and the goal are classified
     first; then ``plan`` (same arguments, but the kernel data packed in two buffers:
     ``sphere_kernel.pack``), and the path's ``_fine_check`` at ``fine_step`` (rad; none when
-    0). One call instead of four (start, goal, search, fine check), and two arrays instead of
-    35: each call from Python types and unboxes its arrays, KernelData's costing 6 us when the
-    caches are warm and 40-110 us right after a scene set-up has evicted them (measured on this
-    project's 2-core VM).
+    0). What the spheres cannot decide there (an end, a sample of the fine check) goes to the
+    robot's exact shapes (``hull_kernel``; ``hull_floats`` and ``hull_ints`` are the packed
+    ``HullData``, or empty: none), and only what those cannot prove free goes back to the
+    caller (to Drake). One call instead of four (start, goal, search, fine check), and four
+    arrays instead of 35 and more: each call from Python types and unboxes its arrays,
+    KernelData's costing 6 us when the caches are warm and 40-110 us right after a scene set-up
+    has evicted them (measured on this project's 2-core VM).
 
     Returns:
         (status, path, how, checks, unproven, bad, unknown, segment): ``plan``'s four (with
@@ -590,7 +596,7 @@ def solve(
         for k in range(2):
             end = q_start if k == 0 else q_goal
             first, n = edge_prefix(end, end, 1.0, d, work, lam, q, counter, anchors, 0.0)
-            if first < n:
+            if first < n and not _hulls_prove(end, d, hull_floats, hull_ints):
                 unproven |= 1 << k
         checks = counter[0]
         if unproven:
@@ -617,28 +623,59 @@ def solve(
     if status == FOUND and fine_step > 0.0:
         counter = np.zeros(1, dtype=np.int64)
         bad, unknown, segment = _fine_check(path, fine_step, d, counter)
+        unknown, segment = _unproven(unknown, segment, d, hull_floats, hull_ints)
         checks += counter[0]
     return status, path, how, checks, unproven, bad, unknown, segment
 
 
 @njit(cache=True)
-def fine_check(path, step, d):
+def _hulls_prove(q, d, hull_floats, hull_ints):
+    """True when the robot's exact shapes (packed ``HullData``; empty: none) prove the
+    configuration q free (``hull_kernel.hull_free``)."""
+    if len(hull_ints) == 0:
+        return False
+    return hull_free(q, d, unpack_hulls(hull_floats, hull_ints), hull_scratch(d))
+
+
+@njit(cache=True)
+def _unproven(unknown, segment, d, hull_floats, hull_ints):
+    """The rows of ``unknown`` (and their ``segment``) that the robot's exact shapes (packed
+    ``HullData``; empty: none) cannot prove free."""
+    if len(hull_ints) == 0 or len(unknown) == 0:
+        return unknown, segment
+    h = unpack_hulls(hull_floats, hull_ints)
+    scratch = hull_scratch(d)
+    keep = np.zeros(len(unknown), dtype=np.bool_)
+    for r in range(len(unknown)):
+        keep[r] = not hull_free(unknown[r], d, h, scratch)
+    return unknown[keep].copy(), segment[keep].copy()
+
+
+@njit(cache=True)
+def fine_check(path, step, d, hull_floats, hull_ints):
     """``_fine_check`` of a path (N, 7) at ``step``, rad: (first COLLIDING segment or -1, the
-    UNKNOWN samples, their segments, configurations classified)."""
+    UNKNOWN samples the robot's exact shapes cannot prove free (packed ``HullData``; empty:
+    none), their segments, configurations classified)."""
     counter = np.zeros(1, dtype=np.int64)
     bad, unknown, segment = _fine_check(path, step, d, counter)
+    unknown, segment = _unproven(unknown, segment, d, hull_floats, hull_ints)
     return bad, unknown, segment, counter[0]
 
 
-def warm_up(data, lower, upper) -> None:
+NO_HULLS = (np.zeros(0), np.zeros(0, dtype=np.int64))
+"""The packed ``HullData`` arguments for none (the spheres' verdicts alone)."""
+
+
+def warm_up(data, lower, upper, hulls=NO_HULLS) -> None:
     """Compiles (first run on a machine, with a note on stderr) or loads ``solve``, ``plan``
-    and ``fine_check`` now rather than in a request: a one-sample problem."""
+    and ``fine_check`` now rather than in a request: a one-sample problem (``hulls``: the
+    packed ``HullData``, or ``NO_HULLS``)."""
     sphere_kernel.announce_compile(solve, plan, fine_check)
     q = np.ascontiguousarray((lower + upper) / 2.0)
     tail = (0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
-    solve(q, q, lower, upper, *pack(data), *tail, True, 0.01)
+    solve(q, q, lower, upper, *pack(data), *hulls, *tail, True, 0.01)
     plan(q, q, lower, upper, data, *tail)
-    fine_check(np.vstack([q, q]), 0.01, data)
+    fine_check(np.vstack([q, q]), 0.01, data, *hulls)
 
 
 # Numba keys a cached function on its own file alone; these compile the kernels' code into theirs.
@@ -649,6 +686,7 @@ refresh_cache(
         Path(sphere_kernel.__file__),
         Path(sphere_batch.__file__),
         Path(trig.__file__),
+        Path(hull_kernel.__file__),
     ],
     Path(plan._cache._cache_path),
 )

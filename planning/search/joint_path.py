@@ -108,6 +108,7 @@ class JointPathSearch:
         model = self._compiled_model()  # the synced sphere model, when the compiled search runs
         if model is not None:
             model.packed_data()
+            self._hulls(model)
         else:
             self._sphere_model()
         self._refine_model(rebuild=True)
@@ -117,7 +118,7 @@ class JointPathSearch:
         the planner is made."""
         model = self._sphere_model()
         if model is not None:
-            compiled_rrt.warm_up(model.kernel_data(), *self.limits)
+            compiled_rrt.warm_up(model.kernel_data(), *self.limits, self._hulls(model))
 
     def proves_free(self, q, *, first: bool = True) -> bool:
         """True when the sphere models prove the arm configuration q (7,) collision-free (then
@@ -180,6 +181,13 @@ class JointPathSearch:
             path, how = self._refined(path, how)
         return path, how
 
+    def _hulls(self, model) -> tuple[np.ndarray, np.ndarray]:
+        """The packed exact shapes the compiled search proves with (``spheres.hull_proofs``),
+        or ``compiled_rrt.NO_HULLS``."""
+        if not self._options.spheres.hull_proofs:
+            return compiled_rrt.NO_HULLS
+        return model.packed_hulls()
+
     def _compiled_model(self):
         """The sphere model of the compiled search, or None when that search does not apply
         (no sphere model, GCS or KTO in use)."""
@@ -236,8 +244,9 @@ class JointPathSearch:
         repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
-        if self.fused:  # the kernel data packed: two arrays to pass, not 35
-            packed = arguments(*search, model.packed_data())
+        hulls = self._hulls(model)
+        if self.fused:  # the kernel data packed: two arrays to pass, not 35 (and the hulls' two)
+            packed = arguments(*search, (*model.packed_data(), *hulls))
             result = compiled_rrt.solve(q_start, q_goal, *packed, check_ends is not None, fine)
             if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
                 check_ends(
@@ -257,7 +266,7 @@ class JointPathSearch:
         # could not): after a repair, only the new piece and what follows are checked.
         verified = 0
         for attempt in range(opts.validation.max_repairs + 1):
-            bad = self._first_failing_segment(path[verified:], fine, data, checked)
+            bad = self._first_failing_segment(path[verified:], fine, data, hulls, checked)
             checked = None
             if bad < 0:
                 return path, name, None
@@ -272,13 +281,14 @@ class JointPathSearch:
             name = "rrt_connect+repaired"
         return None, name, path
 
-    def _first_failing_segment(self, path, resolution: float, data, checked=None) -> int:
+    def _first_failing_segment(self, path, resolution: float, data, hulls, checked=None) -> int:
         """The first segment of the path with a sample at ``resolution`` that the spheres
         prove colliding or that Drake finds colliding among those they cannot decide; -1 when
         none. ``checked``: the spheres' fine check of this path when made already (``solve``).
-        The samples they cannot decide go to the tighter cover, then to Drake."""
+        The samples they cannot decide go to the exact shapes (``hulls``, packed), then to the
+        tighter cover, then to Drake."""
         if checked is None:
-            checked = compiled_rrt.fine_check(path, resolution, data)[:3]
+            checked = compiled_rrt.fine_check(path, resolution, data, *hulls)[:3]
         bad, unknown, segment = checked
         if bad >= 0:  # only samples before the colliding segment matter
             unknown, segment = unknown[segment < bad], segment[segment < bad]

@@ -4,6 +4,9 @@ pick-and-place scenes, scene changes made at run time are seen, unsupported geom
 non-finite configurations are left to Drake. The parts have their own tests: test_sphere_cover,
 test_sphere_robot, test_sphere_fk, test_sphere_kernel and test_sphere_checker."""
 
+import gc
+import weakref
+
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform
@@ -131,6 +134,25 @@ def test_objects_added_removed_and_attached_at_run_time_are_seen(scene, dut):
         assert not np.allclose(dut.sphere_centres(q[None])[0], before)
     finally:
         scene.finger_positions = scene.config.model.finger_position
+
+
+def test_objects_stay_alive_while_the_model_names_them(scene, dut):
+    """The model tells objects apart by identity: it keeps those its last sync saw alive, so
+    that no new object takes the id of a removed one (a held object removed and another
+    attached under its name between two syncs would otherwise look unchanged; seen with held
+    objects replaced in turn, ``test_hull_kernel``)."""
+    q = scene.model.named_configurations["ready"]
+    held = type(scene.world_objects["table"])(
+        "held", "cylinder", (0.02, 2.0), RigidTransform([0.0, 0.0, 0.1])
+    )
+    scene.attach_new(held)
+    assert dut.classify(q[None])[0] != mut.FREE  # the rod through the table
+    scene.remove_object("held")
+    ref = weakref.ref(held)
+    del held
+    gc.collect()
+    assert ref() is not None
+    assert dut.classify(q[None])[0] == mut.FREE
 
 
 def test_unsupported_geometry_falls_back_to_drake(scene, dut, monkeypatch):

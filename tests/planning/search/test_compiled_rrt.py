@@ -81,7 +81,7 @@ def test_around_an_obstacle_every_segment_is_free_for_drake(
     assert status == mut.FOUND and how == 1
     np.testing.assert_array_equal(path[0], q_a)
     np.testing.assert_array_equal(path[-1], q_b)
-    bad, unknown, _, checks = mut.fine_check(path, FINE, data)
+    bad, unknown, _, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
     assert bad == -1 and checks > 0
     assert all(scene.is_collision_free(q) for q in unknown)
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
@@ -123,7 +123,7 @@ def test_the_fine_check_names_the_colliding_segment(scene, data, ends):
     ready = scene.model.named_configurations["ready"]
     path = np.array([q_a, q_a + 0.1 * E[1], q_b])  # the second segment crosses the box
     assert not scene.is_collision_free(ready)
-    bad, _, _, _ = mut.fine_check(path, FINE, data)
+    bad, _, _, _ = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
     assert bad == 1
 
 
@@ -145,7 +145,7 @@ def test_the_fine_check_agrees_with_classifying_every_sample(scene, data, ends):
         stop = colliding[0] if len(colliding) else len(samples)
         expected_bad = owners[stop] if len(colliding) else -1
         undecided = [k for k in range(stop) if state[k] == UNKNOWN]
-        bad, unknown, segment, checks = mut.fine_check(path, FINE, data)
+        bad, unknown, segment, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
         assert bad == expected_bad
         np.testing.assert_array_equal(unknown, np.array(samples)[undecided].reshape(-1, 7))
         np.testing.assert_array_equal(segment, np.array(owners, dtype=int)[undecided])
@@ -205,7 +205,7 @@ def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
 def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     scene, data, limits, ends
 ):
-    args = (*limits, *mut.pack(data), 0.1, 1.0, 0.05, 50_000, 20)
+    args = (*limits, *mut.pack(data), *mut.NO_HULLS, 0.1, 1.0, 0.05, 50_000, 20)
     tail = (0.0, True, np.inf, 1.0)
     status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
         *ends, *args, mut.seed_state(3), *tail, True, FINE
@@ -213,7 +213,7 @@ def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     alone = search(data, limits, *ends, seed=3)
     assert status == alone[0] == mut.FOUND and how == alone[2] and unproven == 0
     np.testing.assert_array_equal(path, alone[1])
-    fine = mut.fine_check(path, FINE, data)
+    fine = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
     assert bad == fine[0] == -1
     np.testing.assert_array_equal(unknown, fine[1])
     np.testing.assert_array_equal(segment, fine[2])

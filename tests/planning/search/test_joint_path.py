@@ -102,8 +102,8 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
     def through_the_box(q_a, q_b, *args):
         result = solve(q_a, q_b, *args)
         straight = np.vstack([q_a, q_b])
-        data = mut.compiled_rrt.unpack(args[2], args[3])  # packed: floats, ints
-        checked = mut.compiled_rrt.fine_check(straight, args[-1], data)[:3]
+        data = mut.compiled_rrt.unpack(args[2], args[3])  # packed: floats, ints, then the hulls'
+        checked = mut.compiled_rrt.fine_check(straight, args[-1], data, args[4], args[5])[:3]
         return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
     plan, edge_steps = mut.compiled_rrt.plan, []
@@ -135,7 +135,7 @@ def test_after_a_repair_only_the_new_piece_and_what_follows_are_checked_again(
     piece = np.vstack([middle[0], middle[0] + 0.05 * E[2], middle[1]])
     seen = []
 
-    def failing(path, resolution, data, checked=None):
+    def failing(path, resolution, data, hulls, checked=None):
         seen.append(path.copy())
         return 1 if len(seen) == 1 else -1  # the segment middle[0] -> middle[1], once
 
@@ -203,7 +203,7 @@ def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
     real = mut.compiled_rrt.solve
 
     def recorded(*args):
-        budgets.append(args[9])  # max_checks (after the packed data's two arrays)
+        budgets.append(args[11])  # max_checks (after the packed data's and hulls' arrays)
         return real(*args)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", recorded)
