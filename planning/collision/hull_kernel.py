@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from planning.collision.sphere_kernel import _distance2, _pose_chain_lanes, _v1, _v2
+from planning.collision.sphere_kernel import _distance2, _pose_chain_lanes, _v1, _v2, unpack
 
 MARGIN = 1e-4  # m, added to every pair's threshold
 _ITERATIONS = 48  # GJK iterations before giving up on a pair (polytopes converge in ~10)
@@ -371,6 +371,18 @@ def hull_free(q, d, h, scratch):
 @njit(cache=True)
 def prove_free(qs, d, h):
     """``hull_free`` of each row of qs (N, 7): a bool array."""
+    return _prove_rows(qs, d, h)
+
+
+@njit(cache=True)
+def prove_free_packed(qs, floats, ints, hull_floats, hull_ints):
+    """``prove_free`` with the ``KernelData`` and the ``HullData`` packed
+    (``sphere_kernel.pack``): four arrays to pass from Python instead of 44."""
+    return _prove_rows(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints))
+
+
+@njit(cache=True)
+def _prove_rows(qs, d, h):
     scratch = hull_scratch(d)
     out = np.zeros(len(qs), dtype=np.bool_)
     for n in range(len(qs)):

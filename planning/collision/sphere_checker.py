@@ -2,10 +2,12 @@
 
 Each configuration is classified by ``spheres.SphereCollisionModel``: FREE (the conservative
 outer spheres touch nothing, so Drake's checker agrees) and COLLIDING (inner balls overlap, so
-Drake's checker agrees) are final; only UNKNOWN configurations go to the scene's
-``SceneGraphCollisionChecker``. So a configuration is accepted exactly when the sphere model
-proves it free or Drake finds it free: nothing Drake rejects is ever accepted, and narrow
-passages where the outer spheres are too fat still pass through Drake. When the scene holds
+Drake's checker agrees) are final; UNKNOWN configurations go to the robot's exact convex shapes
+(``hull_kernel``: proven free when a separating plane shows it), then to a tighter cover, and
+only what those cannot prove free to the scene's ``SceneGraphCollisionChecker``. So a
+configuration is accepted exactly when the models prove it free or Drake finds it free: nothing
+Drake rejects is ever accepted, and narrow passages where the outer spheres are too fat still
+pass. When the scene holds
 geometry without a sphere model, every query goes to Drake.
 
 Edges are sampled at the edge step (the checker's, or ``resolution``) and classified from
@@ -45,6 +47,9 @@ class SphereCheckerAdapter(CheckerAdapter):
             search first, Drake for narrow passages later. None: Drake decides them always.
         refine_slack: m; when given (> 0), a second, tighter cover decides what the first
             cannot before Drake is asked (it proves some free, some colliding).
+        hulls: the robot's exact convex shapes prove free what the first cover cannot decide,
+            where they can (``SphereCollisionModel.prove_free``), before the tighter cover and
+            Drake are asked.
 
     Attributes:
         counts: how many configurations were decided by spheres and how many went to Drake.
@@ -58,6 +63,7 @@ class SphereCheckerAdapter(CheckerAdapter):
         slack: float = 0.015,
         fallback_after: int | None = None,
         refine_slack: float | None = None,
+        hulls: bool = True,
     ):
         super().__init__(scene, resolution)
         self._model = sphere_model(scene, slack)
@@ -66,6 +72,7 @@ class SphereCheckerAdapter(CheckerAdapter):
         if self._refine is not None:
             self._refine.sync()
         self._fallback_after = fallback_after
+        self._hulls = hulls
         self.counts = {"spheres": 0, "drake": 0}
 
     def _fallback(self) -> bool:
@@ -93,13 +100,14 @@ class SphereCheckerAdapter(CheckerAdapter):
 
     def undecided_free(self, qs: np.ndarray) -> np.ndarray:
         """Decides configurations the first cover cannot (rows of qs; a bool array): the
-        tighter cover first (when there is one), Drake for the rest; counts them."""
-        free = np.zeros(len(qs), dtype=bool)
-        ask = np.ones(len(qs), dtype=bool)
-        if self._refine is not None and self._refine.active:
-            state = self._refine.classify(qs)
-            free = state == FREE
-            ask = state == UNKNOWN
+        robot's exact shapes first (``SphereCollisionModel.prove_free``), then the tighter
+        cover (when there is one), Drake for the rest; counts them."""
+        free = self._model.prove_free(qs) if self._hulls else np.zeros(len(qs), dtype=bool)
+        ask = ~free
+        if self._refine is not None and self._refine.active and ask.any():
+            state = self._refine.classify(qs[ask])
+            free[ask] = state == FREE
+            ask[ask] = state == UNKNOWN
         self.counts["spheres"] += int(len(qs) - ask.sum())
         self.counts["drake"] += int(ask.sum())
         if not ask.any():

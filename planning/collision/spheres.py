@@ -34,7 +34,7 @@ from pydrake.multibody.tree import BodyIndex
 
 from planning.collision import sphere_kernel as _kernel
 from planning.collision.hull_kernel import MARGIN as _HULL_MARGIN
-from planning.collision.hull_kernel import HullData
+from planning.collision.hull_kernel import HullData, prove_free_packed
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics, fold_fixed_steps, fold_points
@@ -454,6 +454,16 @@ class SphereCollisionModel:
             _kernel.announce_compile(classify_many)  # on stderr, once, when the first call compiles
             return classify_many(qs, self._data)
         return np.full(len(qs), UNKNOWN, dtype=np.int8)
+
+    def prove_free(self, qs) -> np.ndarray:
+        """True for each row of qs (N, 7) that the robot's exact shapes prove collision-free
+        for Drake's checker (``hull_kernel``): what ``classify`` leaves UNKNOWN, decided
+        without Drake where a separating plane shows it. False everywhere without a model."""
+        qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
+        if not self.active:
+            return np.zeros(len(qs), dtype=bool)
+        _kernel.announce_compile(prove_free_packed)
+        return prove_free_packed(qs, *self.packed_data(), *self.packed_hulls())
 
     def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
         """Classifies samples of segments from their starts up to their first blocking one;

@@ -78,6 +78,7 @@ class JointPathSearch:
             slack=opts.slack,
             fallback_after=after,
             refine_slack=opts.refine_slack if self._refine_model() is not None else None,
+            hulls=opts.hull_proofs,
         )
 
     def _sphere_model(self):

@@ -56,7 +56,7 @@ def test_one_model_per_scene_and_slack(scene, monkeypatch):
 def test_configurations_agree_with_drake_and_are_counted(wall):
     scene = wall
     qs = random_q(scene, 200, seed=1)
-    dut = mut.SphereCheckerAdapter(scene)
+    dut = mut.SphereCheckerAdapter(scene, hulls=False)  # the spheres, then Drake
     free = dut.configs_free(qs)
     assert free.dtype == bool
     np.testing.assert_array_equal(free, drake_free(scene, qs))
@@ -76,19 +76,41 @@ def test_a_tighter_cover_decides_part_of_what_the_first_cannot(wall):
     first = mut.SphereCheckerAdapter(scene).model
     unknown = qs[first.classify(qs) == UNKNOWN]
     assert len(unknown) >= 5
-    dut = mut.SphereCheckerAdapter(scene, refine_slack=0.005)
+    dut = mut.SphereCheckerAdapter(scene, refine_slack=0.005, hulls=False)
     free = dut.configs_free(unknown)
     np.testing.assert_array_equal(free, drake_free(scene, unknown))
     tighter = mut.sphere_model(scene, 0.005).classify(unknown)
     assert dut.counts["drake"] == np.sum(tighter == UNKNOWN) < len(unknown)
     assert dut.counts["spheres"] + dut.counts["drake"] == len(unknown)
     # Edges and prefixes decide their uncertain samples the same way.
-    plain = mut.SphereCheckerAdapter(scene, resolution=0.05)
-    refined = mut.SphereCheckerAdapter(scene, resolution=0.05, refine_slack=0.005)
+    plain = mut.SphereCheckerAdapter(scene, resolution=0.05, hulls=False)
+    refined = mut.SphereCheckerAdapter(scene, resolution=0.05, refine_slack=0.005, hulls=False)
     for q_a, q_b in zip(unknown[:-1], unknown[1:], strict=True):
         assert refined.edge_free(q_a, q_b) == plain.edge_free(q_a, q_b)
         assert refined.free_prefix(q_a, q_b) == plain.free_prefix(q_a, q_b)
     assert refined.counts["drake"] < plain.counts["drake"]
+
+
+def test_the_exact_shapes_decide_most_of_what_the_first_cover_cannot(wall):
+    """By default the configurations the first cover leaves UNKNOWN go to the robot's exact
+    shapes (``SphereCollisionModel.prove_free``) and only those they cannot prove free to
+    Drake: the same answers, fewer Drake calls; edges too."""
+    scene = wall
+    qs = random_q(scene, 400, seed=2)
+    unknown = qs[mut.SphereCheckerAdapter(scene).model.classify(qs) == UNKNOWN]
+    dut = mut.SphereCheckerAdapter(scene)
+    free = dut.configs_free(unknown)
+    np.testing.assert_array_equal(free, drake_free(scene, unknown))
+    proven = dut.model.prove_free(unknown)
+    assert not np.any(proven & ~free)
+    assert dut.counts["drake"] == np.sum(~proven) < len(unknown) / 2
+    assert dut.counts["spheres"] + dut.counts["drake"] == len(unknown)
+    plain = mut.SphereCheckerAdapter(scene, resolution=0.05, hulls=False)
+    exact = mut.SphereCheckerAdapter(scene, resolution=0.05)
+    for q_a, q_b in zip(unknown[:-1], unknown[1:], strict=True):
+        assert exact.edge_free(q_a, q_b) == plain.edge_free(q_a, q_b)
+        assert exact.free_prefix(q_a, q_b) == plain.free_prefix(q_a, q_b)
+    assert exact.counts["drake"] < plain.counts["drake"]
 
 
 def test_edges_and_prefixes_match_drake_samples(wall):
@@ -142,18 +164,20 @@ def test_drake_decides_uncertain_configurations_after_the_fallback_count():
     assert free.any()  # some are free for Drake: the spheres were only unsure
     late = mut.SphereCheckerAdapter(scene, fallback_after=10**9)
     assert not late.configs_free(unknown).any() and late.counts["drake"] == 0
-    early = mut.SphereCheckerAdapter(scene, fallback_after=0)
+    early = mut.SphereCheckerAdapter(scene, fallback_after=0, hulls=False)
     np.testing.assert_array_equal(early.configs_free(unknown), free)
     assert early.counts["drake"] == len(unknown)
     # The switch happens when the count of configurations the spheres decided is reached.
-    switch = mut.SphereCheckerAdapter(scene, fallback_after=int((state != UNKNOWN).sum()))
+    switch = mut.SphereCheckerAdapter(
+        scene, fallback_after=int((state != UNKNOWN).sum()), hulls=False
+    )
     assert not switch.configs_free(unknown).any()
     switch.configs_free(qs)  # the spheres decide that many here
     np.testing.assert_array_equal(switch.configs_free(unknown), free)
     # Segments too: before the fallback an uncertain sample blocks, after it Drake decides.
     starts = np.tile(qs[state == FREE][0], (len(unknown), 1))
     waiting = mut.SphereCheckerAdapter(scene, fallback_after=10**9)
-    deciding = mut.SphereCheckerAdapter(scene, fallback_after=0)
+    deciding = mut.SphereCheckerAdapter(scene, fallback_after=0, hulls=False)
     before, after = (a.free_prefixes(starts, unknown) for a in (waiting, deciding))
     assert np.all(before <= after) and np.any(before < after)
     assert waiting.counts["drake"] == 0 and deciding.counts["drake"] > 0
