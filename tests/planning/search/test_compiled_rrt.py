@@ -228,3 +228,39 @@ def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     result = mut.solve(*ends, *args, mut.seed_state(3), *tail, False, 0.0)
     assert result[0] == mut.FOUND and result[3] == alone[3] and result[5] == -1
     np.testing.assert_array_equal(result[1], alone[1])
+
+
+def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene, data, limits):
+    """With the packed ``HullData``, an end the spheres leave UNKNOWN but the exact shapes prove
+    free does not stop the call (ENDS_UNPROVEN), and the fine check returns only the UNKNOWN
+    samples those cannot prove free."""
+    model = sphere_model(scene)
+    hulls = model.packed_hulls()
+    # Configurations by the wall that the spheres cannot decide and the hulls prove free.
+    rng = np.random.default_rng(11)
+    ready = scene.model.named_configurations["ready"]
+    qs = np.clip(ready + rng.normal(0.0, 0.3, (3000, 7)), *limits)
+    unknown = qs[model.classify(qs) == UNKNOWN]
+    proven = unknown[mut.hull_kernel.prove_free(unknown, data, model.hull_data())]
+    assert len(proven) >= 2
+    start, goal = proven[0], proven[1]
+    tail = (0.0, True, np.inf, 1.0)
+
+    def solve(hull_buffers, check_ends):
+        args = (*limits, *mut.pack(data), *hull_buffers, 0.1, 1.0, 0.05, 50_000, 20)
+        return mut.solve(start, goal, *args, mut.seed_state(3), *tail, check_ends, FINE)
+
+    without = solve(mut.NO_HULLS, True)
+    assert without[0] == mut.ENDS_UNPROVEN and without[4] == 3  # neither end proven
+    status, path, _, _, unproven, bad, unknown_left, segment = solve(hulls, True)
+    assert status == mut.FOUND and unproven == 0
+    # The same search either way; the fine check's UNKNOWN samples are the spheres' less those
+    # the hulls prove (fine samples by the wall, between the search's).
+    alone = solve(mut.NO_HULLS, False)
+    np.testing.assert_array_equal(path, alone[1])
+    assert bad == alone[5]
+    left = {tuple(q) for q in unknown_left}
+    assert left <= {tuple(q) for q in alone[6]}
+    expected = ~mut.hull_kernel.prove_free(alone[6], data, model.hull_data())
+    assert len(left) == int(expected.sum()) < len(alone[6])
+    assert len(segment) == len(unknown_left)
