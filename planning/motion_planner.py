@@ -27,6 +27,7 @@ import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
 from planning.collision.checker import CheckerAdapter
+from planning.collision.hull_kernel import prove_free_packed
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import announce_compile
@@ -65,6 +66,7 @@ class MotionPlanner:
             compiled_rrt.plan,
             compiled_rrt.fine_check,
             classify_many,
+            prove_free_packed,
             toppra.solve,
             cubic.evaluate,
             newton,

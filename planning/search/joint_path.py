@@ -120,6 +120,8 @@ class JointPathSearch:
         model = self._sphere_model()
         if model is not None:
             compiled_rrt.warm_up(model.kernel_data(), *self.limits, self._hulls(model))
+            if self._options.spheres.hull_proofs:  # the Python side's exact proofs (~18 ms)
+                model.prove_free((self.limits[0] + self.limits[1])[None, :] / 2.0)
 
     def proves_free(self, q, *, first: bool = True) -> bool:
         """True when the sphere models prove the arm configuration q (7,) collision-free (then
