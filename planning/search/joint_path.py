@@ -59,12 +59,13 @@ class JointPathSearch:
         adapter = CheckerAdapter(scene)
         self.limits = (adapter.lower, adapter.upper)  # the arm's joint limits, rad (fixed)
 
-    def adapter(self, resolution: float | None = None, *, search: bool = False):
+    def adapter(self, resolution: float | None = None, *, search: bool = False, hulls: bool = True):
         """Collision queries: sphere models first when enabled
         (``planning.collision.sphere_checker``). A search adapter leaves Drake out for
         ``spheres.drake_fallback_after`` sphere-checked configurations (what the spheres cannot
         decide counts as colliding), then asks it too; a validating one always does, so validation
-        accepts exactly what Drake's checker accepts."""
+        accepts exactly what Drake's checker accepts. ``hulls`` False: the exact shapes are not
+        asked (the caller has asked them already), whatever ``spheres.hull_proofs`` says."""
         opts = self._options.spheres
         if not opts.enabled:
             return CheckerAdapter(self._scene, resolution)
@@ -78,7 +79,7 @@ class JointPathSearch:
             slack=opts.slack,
             fallback_after=after,
             refine_slack=opts.refine_slack if self._refine_model() is not None else None,
-            hulls=opts.hull_proofs,
+            hulls=opts.hull_proofs and hulls,
         )
 
     def _sphere_model(self):
@@ -295,8 +296,8 @@ class JointPathSearch:
         bad, unknown, segment = checked
         if bad >= 0:  # only samples before the colliding segment matter
             unknown, segment = unknown[segment < bad], segment[segment < bad]
-        if len(unknown):
-            adapter = self.adapter(resolution)
+        if len(unknown):  # what the exact shapes could not prove free (the compiled check)
+            adapter = self.adapter(resolution, hulls=False)
             blocked = segment[~adapter.undecided_free(unknown)]
             if len(blocked):
                 return int(blocked.min())
