@@ -108,6 +108,17 @@ def _hull_support(h, g, T, nx, ny, nz):
 
 
 @njit(cache=True, _nrt=False)
+def _centre(h, g, T):
+    """The centre of robot shape g's bounding sphere, posed by the transforms T (world)."""
+    X = T[h.geom_step[g]]
+    c = h.geom_centre[g]
+    x = X[0, 0] * c[0] + X[0, 1] * c[1] + X[0, 2] * c[2] + X[0, 3]
+    y = X[1, 0] * c[0] + X[1, 1] * c[1] + X[1, 2] * c[2] + X[1, 3]
+    z = X[2, 0] * c[0] + X[2, 1] * c[1] + X[2, 2] * c[2] + X[2, 3]
+    return x, y, z
+
+
+@njit(cache=True, _nrt=False)
 def _object_support(obj, nx, ny, nz):
     """The point of a world object (a ``KernelData.objects`` row) farthest along (nx, ny, nz)."""
     # The direction in the object's frame: W n (W = R_WO^T).
@@ -255,17 +266,12 @@ def _apart(h, g, other, obj, T, gap, P, v):
     are provably more than ``gap`` apart (GJK, see the module docstring); P (4, 3) and v (3,)
     are scratch."""
     # A first direction: from the other's bounding centre to g's.
-    X = T[h.geom_step[g]]
-    c = h.geom_centre[g]
-    vx = X[0, 0] * c[0] + X[0, 1] * c[1] + X[0, 2] * c[2] + X[0, 3]
-    vy = X[1, 0] * c[0] + X[1, 1] * c[1] + X[1, 2] * c[2] + X[1, 3]
-    vz = X[2, 0] * c[0] + X[2, 1] * c[1] + X[2, 2] * c[2] + X[2, 3]
+    vx, vy, vz = _centre(h, g, T)
     if other >= 0:
-        Y = T[h.geom_step[other]]
-        e = h.geom_centre[other]
-        vx -= Y[0, 0] * e[0] + Y[0, 1] * e[1] + Y[0, 2] * e[2] + Y[0, 3]
-        vy -= Y[1, 0] * e[0] + Y[1, 1] * e[1] + Y[1, 2] * e[2] + Y[1, 3]
-        vz -= Y[2, 0] * e[0] + Y[2, 1] * e[1] + Y[2, 2] * e[2] + Y[2, 3]
+        ox, oy, oz = _centre(h, other, T)
+        vx -= ox
+        vy -= oy
+        vz -= oz
     else:  # the object's centre: p_W = W^T offset
         vx -= obj[1] * obj[10] + obj[4] * obj[11] + obj[7] * obj[12]
         vy -= obj[2] * obj[10] + obj[5] * obj[11] + obj[8] * obj[12]
@@ -301,11 +307,7 @@ def _shapes_free(h, objects, T, P, v, none):
         gap = h.geom_world[g]
         if gap < 0.0:
             continue
-        X = T[h.geom_step[g]]
-        c = h.geom_centre[g]
-        x = X[0, 0] * c[0] + X[0, 1] * c[1] + X[0, 2] * c[2] + X[0, 3]
-        y = X[1, 0] * c[0] + X[1, 1] * c[1] + X[1, 2] * c[2] + X[1, 3]
-        z = X[2, 0] * c[0] + X[2, 1] * c[1] + X[2, 2] * c[2] + X[2, 3]
+        x, y, z = _centre(h, g, T)
         reach = h.geom_bound[g] + gap
         for o in range(len(objects)):
             if _distance2(x, y, z, objects[o]) > reach * reach:
@@ -316,20 +318,9 @@ def _shapes_free(h, objects, T, P, v, none):
         g = h.pair[p, 0]
         e = h.pair[p, 1]
         gap = h.pair_gap[p]
-        X = T[h.geom_step[g]]
-        Y = T[h.geom_step[e]]
-        c = h.geom_centre[g]
-        f = h.geom_centre[e]
-        dx = dy = dz = 0.0
-        for i in range(3):
-            u = X[i, 0] * c[0] + X[i, 1] * c[1] + X[i, 2] * c[2] + X[i, 3]
-            u -= Y[i, 0] * f[0] + Y[i, 1] * f[1] + Y[i, 2] * f[2] + Y[i, 3]
-            if i == 0:
-                dx = u
-            elif i == 1:
-                dy = u
-            else:
-                dz = u
+        ax, ay, az = _centre(h, g, T)
+        bx, by, bz = _centre(h, e, T)
+        dx, dy, dz = ax - bx, ay - by, az - bz
         reach = h.geom_bound[g] + h.geom_bound[e] + gap
         if dx * dx + dy * dy + dz * dz > reach * reach:
             continue
@@ -371,20 +362,15 @@ def hull_free(q, d, h, scratch):
 @njit(cache=True)
 def prove_free(qs, d, h):
     """``hull_free`` of each row of qs (N, 7): a bool array."""
-    return _prove_rows(qs, d, h)
+    scratch = hull_scratch(d)
+    out = np.zeros(len(qs), dtype=np.bool_)
+    for n in range(len(qs)):
+        out[n] = hull_free(qs[n], d, h, scratch)
+    return out
 
 
 @njit(cache=True)
 def prove_free_packed(qs, floats, ints, hull_floats, hull_ints):
     """``prove_free`` with the ``KernelData`` and the ``HullData`` packed
     (``sphere_kernel.pack``): four arrays to pass from Python instead of 44."""
-    return _prove_rows(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints))
-
-
-@njit(cache=True)
-def _prove_rows(qs, d, h):
-    scratch = hull_scratch(d)
-    out = np.zeros(len(qs), dtype=np.bool_)
-    for n in range(len(qs)):
-        out[n] = hull_free(qs[n], d, h, scratch)
-    return out
+    return prove_free(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints))

@@ -621,10 +621,8 @@ def solve(
     checks += searched
     bad = -1
     if status == FOUND and fine_step > 0.0:
-        counter = np.zeros(1, dtype=np.int64)
-        bad, unknown, segment = _fine_check(path, fine_step, d, counter)
-        unknown, segment = _unproven(unknown, segment, d, hull_floats, hull_ints)
-        checks += counter[0]
+        bad, unknown, segment, samples = fine_check(path, fine_step, d, hull_floats, hull_ints)
+        checks += samples
     return status, path, how, checks, unproven, bad, unknown, segment
 
 
