@@ -20,7 +20,6 @@ is only partly achievable is returned with ``success=False`` and the fraction ac
 
 import dataclasses as dc
 import functools
-import math
 import time
 
 import numpy as np
@@ -81,7 +80,8 @@ class MotionPlanner:
                 sphere_model(scene, spheres.refine_slack)
         self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
         self._search.warm_up()  # the compiled search is compiled or loaded here, once
-        self._limit_lists = [limit.tolist() for limit in self._search.limits]  # for _as_arm
+        lower, upper = self._search.limits  # for _as_arm: the limits, and with their tolerance
+        self._limits = (lower, upper, lower - 1e-6, upper + 1e-6)
         self._state.ik_solver()  # made now rather than in the first pose request
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
@@ -295,15 +295,19 @@ class MotionPlanner:
             raise PlanningError(code, f"the {what} collides: {self._scene.describe_collisions(q)}")
 
     def _as_arm(self, q, code: ErrorCode, what: str) -> np.ndarray:
-        # On plain floats: a few numpy calls on 7 values cost more than the sphere check.
-        values = np.asarray(q, dtype=float).reshape(-1).tolist()
-        if len(values) not in (7, 9) or not all(math.isfinite(v) for v in values):
-            raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {values}")
-        values = values[:7]
-        bounds = list(zip(values, *self._limit_lists, strict=True))
-        if any(v < lo - 1e-6 or v > hi + 1e-6 for v, lo, hi in bounds):
-            raise PlanningError(code, f"the {what} {np.round(values, 4).tolist()} is out of limits")
-        return np.array([min(max(v, lo), hi) for v, lo, hi in bounds])
+        """q as the 7 arm joints clamped into their limits (a copy), or raises ``code`` when it
+        is not 7 or 9 finite values or lies beyond a limit by more than 1e-6 rad. Three array
+        operations on the good path (~4 us; a loop over plain floats took ~12 us)."""
+        values = np.asarray(q, dtype=float).reshape(-1)
+        lower, upper, low, high = self._limits
+        arm = values[:7]
+        inside = values.size in (7, 9) and ((arm >= low) & (arm <= high)).all()  # NaN: outside
+        if not (inside and (values.size == 7 or np.isfinite(values[7:]).all())):
+            if values.size not in (7, 9) or not np.isfinite(values).all():
+                listed = values.tolist()
+                raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {listed}")
+            raise PlanningError(code, f"the {what} {np.round(arm, 4).tolist()} is out of limits")
+        return arm.clip(lower, upper)
 
     def _raise_if_goal_collides(self, X_WE, p_WE, R_WE, q_start) -> None:
         """Raises GOAL_IN_COLLISION when IK without collision avoidance finds only colliding

@@ -23,8 +23,10 @@ scratch tuple was counted in and out around the loops, and the counting cost a f
 (search on MBM: 23 % less time, the same checks and paths; measured in paired runs).
 ``_classify_one`` is inlined where it is called (numba's ``inline="always"``): a call passed its
 forty-odd arrays field by field, 12 % of the search's time (paired runs; the first compile took
-103 s against 120 s without it, measured in turn: no longer within the VM's noise). Inlining the
-small helpers as well gained 2-3 % more for a first compile of 162 s: not done. The sines and
+103 s against 120 s without it, measured in turn: no longer within the VM's noise). The exact
+distance to an object (``_distance2``) and the vectorised sines and cosines are inlined too
+(profiled with their symbols, the two took a tenth of the search's compiled time as calls):
+per-problem median 0.974x on all of MBM, the same paths. The sines and
 cosines come from ``planning.collision.trig``, all of a configuration's in one loop that
 vectorises; the groups' centres are computed when a test first needs them (most are not).
 These two and the kinematics and centres written out (``_step``, ``_points``): per-problem
@@ -74,7 +76,9 @@ class KernelData(NamedTuple):
     Self: ``body_pair`` (Q, 2) checked body pairs, ``body_pair_reach2`` (Q,), their group
     pairs in rows ``body_pair_start[q]`` to ``body_pair_start[q + 1]`` of ``pair_group``
     (P, 2), ``pair_reach2`` (P,), ``pair_a``, ``pair_b`` (P, 16) sphere indices, ``pair_out``,
-    ``pair_in`` (P, 16).
+    ``pair_in`` (P, 16); the rows of a body pair run by their first group, and
+    ``pair_side_reach2`` (P,) is the squared reach of a row's first group to the other body's
+    centre (``p_BL``), beyond which none of that group's rows is within reach.
     Objects: ``objects`` (O, 22), one row per object (columns: ``OBJ_*``): its kind (0 box,
     1 cylinder, 2 sphere), W = R_WO^T (row-major), offset = R_WO^T p_WO, its sizes (box: half
     sizes; cylinder: radius, half length; sphere: radius) and the lower and upper corners of
@@ -83,8 +87,9 @@ class KernelData(NamedTuple):
     sphere's, a group's or the body's bounding centre) moves per rad of each arm joint, m/rad,
     in any configuration (``spheres.speed_table``; inf: no bound, so no certificates).
     Roots, for the certificates' clearances: ``env_reach``, ``env_out_root``,
-    ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, the square roots of ``env_reach2``,
-    ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out`` (0 where those are -1).
+    ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, ``pair_side_reach``, the square
+    roots of ``env_reach2``, ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out``,
+    ``pair_side_reach2`` (0 where those are -1).
     """
 
     parent: np.ndarray
@@ -122,6 +127,8 @@ class KernelData(NamedTuple):
     body_pair_reach: np.ndarray
     pair_reach: np.ndarray
     pair_out_root: np.ndarray
+    pair_side_reach2: np.ndarray
+    pair_side_reach: np.ndarray
 
 
 # ------------------------------------------------------------------ packed arrays ----
@@ -214,6 +221,8 @@ def unpack(f, i):
         _v1(f, i, 32),
         _v1(f, i, 33),
         _v2(f, i, 34),
+        _v1(f, i, 35),
+        _v1(f, i, 36),
     )
 
 
@@ -318,7 +327,7 @@ def _box_gap2(boxes, o, x, y, z):
     return gx * gx + gy * gy + gz * gz
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _distance2(x, y, z, obj):
     """Squared distance from the point (x, y, z) to the object of row ``obj``, m^2 (0 inside)."""
     u = obj[1] * x + obj[2] * y + obj[3] * z - obj[10]
@@ -489,12 +498,27 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
             if speed > 0.0:
                 radius = min(radius, (np.sqrt(gap2) - d.body_pair_reach[p]) / speed)
             continue
+        # Each first group against the other body's bounding sphere, then its group pairs.
+        last = -1
+        side_far = False
         for k in range(d.body_pair_start[p], d.body_pair_start[p + 1]):
-            for g in (d.pair_group[k, 0], d.pair_group[k, 1]):
+            g = d.pair_group[k, 0]
+            if g != last:
+                last = g
                 if group_seen[g] != now:
                     _point(T, d.group_step[g], d.p_BG, g, groups, g)
                     group_seen[g] = now
-            gap2 = _gap2(groups, d.pair_group[k, 0], groups, d.pair_group[k, 1])
+                gap2 = _gap2(groups, g, bodies, b_body)
+                side_far = gap2 >= d.pair_side_reach2[k]
+                if side_far and speed > 0.0:
+                    radius = min(radius, (np.sqrt(gap2) - d.pair_side_reach[k]) / speed)
+            if side_far:
+                continue
+            h = d.pair_group[k, 1]
+            if group_seen[h] != now:
+                _point(T, d.group_step[h], d.p_BG, h, groups, h)
+                group_seen[h] = now
+            gap2 = _gap2(groups, g, groups, h)
             if gap2 >= d.pair_reach2[k]:
                 if speed > 0.0:
                     radius = min(radius, (np.sqrt(gap2) - d.pair_reach[k]) / speed)

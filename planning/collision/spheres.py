@@ -55,6 +55,7 @@ _ROOTS = {
     "body_pair_reach": "body_pair_reach2",
     "pair_reach": "pair_reach2",
     "pair_out_root": "pair_out",
+    "pair_side_reach": "pair_side_reach2",
 }
 
 
@@ -333,6 +334,13 @@ class SphereCollisionModel:
             body_pair_start=np.asarray(run, dtype=np.int64),
             pair_group=np.column_stack((g, h)).astype(np.int64).reshape(-1, 2),
             pair_reach2=reach**2,
+            # The first group of each pair against the other body's bounding sphere (which holds
+            # every group of that body): out of this reach, none of its pairs with that body is
+            # within theirs.
+            pair_side_reach2=(
+                group_radius[g] + body_radius[group_body[h]] + np.maximum(pad[:, 0], 0.0) + _MARGIN
+            )
+            ** 2,
             pair_a=pair_a,
             pair_b=pair_b,
             pair_out=pair_out,

@@ -71,7 +71,7 @@ def sincos(x):
     return np.sin(x), np.cos(x)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def sincos_lanes(x, sin_out, cos_out, count):
     """sin_out[i], cos_out[i] = sincos(x[i]) for i < count, in a loop the compiler vectorises
     when every |x[i]| is within REDUCED_UP_TO (else the C library's, one at a time)."""

@@ -16,7 +16,7 @@ those:
    measured no better on the hard MBM problems (at 4k and 10k checks, 14 and 9 of the 50
    slowest gave up, against 3 without);
 3. shortcutting: greedy vertex skipping, then random shortcuts between points along the path
-   (Geraerts and Overmars, IJRR 2007), then greedy again;
+   (Geraerts and Overmars, IJRR 2007);
 and ``fine_check`` then checks every sample of the result at the fine resolution, 32 at a time
 in one vectorised call (``planning.collision.sphere_batch``: 2.9x cheaper than one at a time
 with certificates, whose radii on MBM paths are mostly below the 0.01 rad between samples),
@@ -30,6 +30,7 @@ from an xorshift64* generator seeded with SplitMix64, so they are the same on ev
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
@@ -58,12 +59,19 @@ _MASK = (1 << 64) - 1
 
 
 def seed_state(seed: int) -> np.ndarray:
-    """The generator's state for an integer seed (SplitMix64 of it, never zero), (1,) uint64."""
-    z = (int(seed) + 0x9E3779B97F4A7C15) & _MASK
+    """The generator's state for an integer seed (SplitMix64 of it, never zero), (1,) uint64:
+    a new array, which the search advances."""
+    return np.array([_splitmix(int(seed))], dtype=np.uint64)
+
+
+@functools.lru_cache(maxsize=64)
+def _splitmix(seed: int) -> int:
+    """SplitMix64 of the seed, never zero (kept: each request starts from its planner's seed)."""
+    z = (seed + 0x9E3779B97F4A7C15) & _MASK
     z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _MASK
     z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _MASK
     z ^= z >> 31
-    return np.array([z or 1], dtype=np.uint64)
+    return z or 1
 
 
 @njit(cache=True, _nrt=False)
@@ -352,8 +360,10 @@ def _at(path, cum, s):
 
 @njit(cache=True)
 def _shortcut(path, iterations, edge_step, d, rng, scratch):
-    """Greedy vertex skipping, ``iterations`` random shortcuts between two points drawn by arc
-    length (kept when free and shorter), then greedy skipping again."""
+    """Greedy vertex skipping, then ``iterations`` random shortcuts between two points drawn by
+    arc length (kept when free and shorter). A second greedy pass after them was measured on
+    all of MBM: 55 of the median request's 240 shortcut checks, for paths 0.5 % shorter (median
+    4.856 against 4.878 rad); without it, per-problem median 0.944x (``planner_ab.py``)."""
     path = _greedy(path, edge_step, d, scratch)
     for _ in range(iterations):
         if len(path) < 3:
@@ -385,7 +395,7 @@ def _shortcut(path, iterations, edge_step, d, rng, scratch):
         out[i + 2] = q_b
         out[i + 3 :] = path[k + 1 :]
         path = _drop_duplicates(out)
-    return _greedy(path, edge_step, d, scratch)
+    return path
 
 
 @njit(cache=True)

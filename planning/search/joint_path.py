@@ -243,9 +243,6 @@ class JointPathSearch:
             )
 
         search = (spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
-        # Repairs re-plan a segment on finer edges (``validation.repair_resolution``), the spheres
-        # alone deciding (nothing to ask); the fine check then looks at the result again.
-        repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
         hulls = self._hulls(model)
@@ -277,6 +274,9 @@ class JointPathSearch:
             bad += verified
             if attempt == opts.validation.max_repairs:
                 break
+            # A repair re-plans the segment on finer edges (``validation.repair_resolution``), the
+            # spheres alone deciding (nothing to ask); the fine check then looks at it again.
+            repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
             status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair)
             if status != compiled_rrt.FOUND:
                 break

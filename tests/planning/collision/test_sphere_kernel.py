@@ -293,6 +293,47 @@ def test_a_free_configuration_stays_free_within_its_radius(cluttered):
     assert len(radii) > 100 and np.median(radii) > 0.002  # certificates that skip samples
 
 
+def _world_points(d, q, steps, points):
+    """The world positions of ``points`` (K, 3), fixed on the kinematic ``steps`` (K,), at the
+    arm configuration q."""
+    full = d.template.copy()
+    full[d.arm] = q
+    T = mut.transforms(full[None], d.parent, d.kind, d.q_index, d.terms)[0]  # (J, 3, 4)
+    return np.einsum("kij,kj->ki", T[steps, :, :3], points) + T[steps, :, 3]
+
+
+def test_a_group_far_from_the_other_bodys_sphere_is_far_from_its_groups(cluttered):
+    """The self-collision culling the kernels use: a pair's first group out of
+    ``pair_side_reach2`` of the other body's centre is out of ``pair_reach2`` of every group of
+    that body it is paired with, so skipping those pairs skips no test that could fail."""
+    scene, model, d = cluttered
+    adapter = CheckerAdapter(scene)
+    rng = np.random.default_rng(3)
+    runs = d.body_pair_start
+    for p in range(len(d.body_pair)):  # each body pair's rows run by their first group
+        g = d.pair_group[runs[p] : runs[p + 1], 0]
+        assert len(set(g.tolist())) == 1 + np.count_nonzero(np.diff(g))
+    culled = 0
+    for q in rng.uniform(adapter.lower, adapter.upper, (300, 7)):
+        groups = _world_points(d, q, d.group_step, d.p_BG)
+        bodies = _world_points(d, q, d.body_step, d.p_BL)
+        for p in range(len(d.body_pair)):
+            rows = np.arange(runs[p], runs[p + 1])
+            g, h = d.pair_group[rows, 0], d.pair_group[rows, 1]
+            side2 = np.sum((groups[g] - bodies[d.body_pair[p, 1]]) ** 2, axis=1)
+            pair2 = np.sum((groups[g] - groups[h]) ** 2, axis=1)
+            far = side2 >= d.pair_side_reach2[rows]
+            assert np.all(pair2[far] >= d.pair_reach2[rows][far])
+            culled += np.count_nonzero(
+                far
+                & (
+                    np.sum((bodies[d.body_pair[p, 0]] - bodies[d.body_pair[p, 1]]) ** 2)
+                    < d.body_pair_reach2[p]
+                )
+            )
+    assert culled > 100  # the culling applies where the bodies' spheres overlap
+
+
 def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
     """The certified march finds the same first blocking sample as checking all of them."""
     scene, model, d = cluttered
