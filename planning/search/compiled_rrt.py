@@ -2,10 +2,10 @@
 fine check, on the sphere models alone (numba; ``planning.collision.sphere_kernel``).
 
 ``plan`` is what ``JointPathSearch.find`` tries first when the scene has sphere models. It
-runs the same steps as the Python pipeline, with every edge checked on the spheres (``_free``)
-and UNKNOWN samples counted as colliding (but near the start and goal, see ``anchor_radius``),
-so what it returns is free for Drake's checker too once the fine check has asked it about
-those:
+runs the same steps as the Python pipeline (but its second greedy pass: see ``_shortcut``),
+with every edge checked on the spheres (``_free``) and UNKNOWN samples counted as colliding
+(but near the start and goal, see ``anchor_radius``), so what it returns is free for Drake's
+checker too once the fine check has asked it about those:
 
 1. the straight line, at the search resolution;
 2. RRT-Connect (Kuffner and LaValle, ICRA 2000), one extension at a time, edges checked at the
