@@ -104,8 +104,10 @@ class ShortcutOptions:
 
     # Random shortcut attempts after the greedy pass. Measured on all of MBM with the compiled
     # search: 40 / 50 / 60 gave median paths of 4.94 / 4.90 / 4.89 rad for median times of
-    # 3.0 / 3.3 / 3.5 ms.
-    iterations: int = 50
+    # 3.0 / 3.3 / 3.5 ms; later, with a faster kernel and both greedy passes, 30 against 50:
+    # per-problem median 0.95x (benchmarks/planner_ab.py), paths 4.883 against 4.856 rad, and
+    # the timed plans as long (median 2.09 against 2.10 s).
+    iterations: int = 30
     time_fraction: float = 0.2  # at most this share of the remaining time goes to shortcutting
 
     def check(self, prefix: str = "shortcut") -> None:

@@ -31,7 +31,7 @@ def test_defaults_are_the_documented_values():
         batch=16,
         restart_interval=10.0,
     )
-    assert o.shortcut == mut.ShortcutOptions(iterations=50, time_fraction=0.2)
+    assert o.shortcut == mut.ShortcutOptions(iterations=30, time_fraction=0.2)
     assert o.validation == mut.ValidationOptions(
         resolution=0.01,
         max_repairs=3,
