@@ -9,7 +9,7 @@ hands every problem to one worker, then to the other, alternating which goes fir
 one of them works at a time: both see the same machine, whatever its speed is doing, and the
 other core stays idle. Each worker times ``MotionPlanner.plan_path`` as ``python -m
 planning.benchmark`` does (scene loaded and ``prepare``d untimed). ``--set`` changes an option
-of NEW's planner (``shortcut.iterations=30``), to compare options on one checkout.
+of NEW's planner (``shortcut.iterations=40``), to compare options on one checkout.
 
 Prints both sides' median, p95 and mean (ms), their median path lengths, the median over the
 problems of NEW's time over OLD's, the ratio of the total times, the share of problems with the

@@ -33,8 +33,10 @@ def test_settings_change_a_section_field_with_its_type():
     from planning.motion_planner import MotionPlannerOptions
 
     base = MotionPlannerOptions()
-    options = mut.with_settings(base, ["shortcut.iterations=30", "rrt.balance=false"])
-    assert options.shortcut.iterations == 30 and options.rrt.balance is False
+    changed = base.shortcut.iterations + 10
+    options = mut.with_settings(base, [f"shortcut.iterations={changed}", "rrt.balance=false"])
+    assert options.shortcut.iterations == changed and options.rrt.balance is False
+    assert base.rrt.balance is True  # both settings change their default
     assert options.rrt.step == base.rrt.step
     for bad in ("shortcut.nope=1", "shortcut.iterations=x", "rrt.balance=maybe", "rrt.step=-1"):
         with pytest.raises(ValueError, match="--set"):
