@@ -24,12 +24,22 @@ slack, so it costs no proofs that matter.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from planning.collision.sphere_kernel import _distance2, _pose_chain_lanes, _v1, _v2, unpack
+from planning.collision import sphere_kernel, trig
+from planning.collision.sphere_kernel import (
+    _distance2,
+    _pose_chain_lanes,
+    _v1,
+    _v2,
+    refresh_cache,
+    unpack,
+)
 
 MARGIN = 1e-4  # m, added to every pair's threshold
 _ITERATIONS = 48  # GJK iterations before giving up on a pair (polytopes converge in ~10)
@@ -374,3 +384,12 @@ def prove_free_packed(qs, floats, ints, hull_floats, hull_ints):
     """``prove_free`` with the ``KernelData`` and the ``HullData`` packed
     (``sphere_kernel.pack``): four arrays to pass from Python instead of 44."""
     return prove_free(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints))
+
+
+# Numba keys a cached function on its own file alone; these compile the kernel's code (its
+# kinematics, distances and ``unpack``) into theirs.
+refresh_cache(
+    sys.modules[__name__],
+    [Path(__file__), Path(sphere_kernel.__file__), Path(trig.__file__)],
+    Path(prove_free_packed._cache._cache_path),
+)

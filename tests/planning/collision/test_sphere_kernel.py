@@ -420,3 +420,40 @@ def test_packed_data_unpacks_to_the_same_arrays_in_compiled_code(scene):
 
     expected = mut.prefixes(qs, qs, 1.0, False, data)[0]
     np.testing.assert_array_equal(scan(qs, *mut.pack(data)), expected)
+
+
+# Each module whose compiled functions take in this kernel's code, and the sources its cache is
+# keyed on besides its own file (the kernel, then the others it inlines), in its order.
+_KERNEL_USERS = {
+    "planning.collision.sphere_batch": ["planning.collision.trig"],
+    "planning.collision.hull_kernel": ["planning.collision.trig"],
+    "planning.search.pose_kernel": ["planning.collision.trig"],
+    "planning.search.compiled_rrt": [
+        "planning.collision.sphere_batch",
+        "planning.collision.trig",
+        "planning.collision.hull_kernel",
+    ],
+}
+
+
+@pytest.mark.parametrize("name", sorted(_KERNEL_USERS))
+def test_modules_compiling_the_kernel_in_key_their_cache_on_it(name):
+    """Numba keys a cached function on its own file alone; a module whose compiled functions
+    take in this kernel's code keeps a hash of its own source, the kernel's and the others' it
+    inlines beside its cache (``refresh_cache``), so that a change of the kernel alone cannot
+    leave stale code reading a changed data layout."""
+    import hashlib
+    import importlib
+    from pathlib import Path
+
+    module = importlib.import_module(name)
+    cached = [
+        v
+        for v in vars(module).values()
+        if hasattr(v, "py_func") and v._cache and v.py_func.__module__ == name
+    ]
+    assert cached
+    sources = [module, mut] + [importlib.import_module(m) for m in _KERNEL_USERS[name]]
+    digest = hashlib.sha256(b"".join(Path(m.__file__).read_bytes() for m in sources))
+    marker = Path(cached[0]._cache._cache_path) / f"{Path(module.__file__).stem}.kernel.sha256"
+    assert marker.read_text() == digest.hexdigest()
