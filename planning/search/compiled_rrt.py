@@ -55,6 +55,10 @@ from planning.collision.sphere_kernel import (
 
 FOUND, GAVE_UP, ENDS_UNPROVEN = 0, 1, 2
 _MARCH_BELOW = 0.05  # rad: edges sampled finer than this are checked in order, with certificates
+# Blocking samples remembered, and how near (rad) an edge must pass one to check there first:
+# on MBM, 4 % fewer checks in the search (the shortcuts' 9 %), the same paths.
+_WITNESSES = 4
+_WITNESS_RADIUS = 0.3
 _MASK = (1 << 64) - 1
 
 
@@ -151,43 +155,87 @@ def _branch(nodes, parent, index):
 
 
 @njit(cache=True, _nrt=False)
+def _remember(q, witnesses, ring):
+    """Keeps q, a sample that blocked an edge, among the last ``_WITNESSES`` such samples
+    (``ring``: how many are kept, and the row to write next)."""
+    row = ring[1]
+    for j in range(len(q)):
+        witnesses[row, j] = q[j]
+    ring[1] = (row + 1) % len(witnesses)
+    ring[0] = min(ring[0] + 1, len(witnesses))
+
+
+@njit(cache=True, _nrt=False)
+def _nearest_sample(q_a, q_b, length2, n, witnesses, ring):
+    """The inner sample i (1 <= i < n) of the segment q_a -> q_b nearest to a remembered
+    blocking sample, when one lies within ``_WITNESS_RADIUS`` rad of it; else -1."""
+    best, chosen = _WITNESS_RADIUS * _WITNESS_RADIUS, -1
+    for w in range(ring[0]):
+        along = 0.0
+        for j in range(len(q_a)):
+            along += (witnesses[w, j] - q_a[j]) * (q_b[j] - q_a[j])
+        i = min(max(int(round(along / length2 * n)), 1), n - 1)
+        t = i / n
+        gap = 0.0
+        for j in range(len(q_a)):
+            gap += (q_a[j] + t * (q_b[j] - q_a[j]) - witnesses[w, j]) ** 2
+        if gap < best:
+            best, chosen = gap, i
+    return chosen
+
+
+@njit(cache=True, _nrt=False)
 def _free(q_a, q_b, step, d, scratch, end_known=False):
     """True when every sample t = i/n, i = 1..n of the segment (n = ceil(length / step)) is
     free, UNKNOWN ones near an anchor included (``edge_prefix``). The end goes first (unless
-    ``end_known``: a waypoint, checked already), then the others in bisection order (midpoint,
-    quarter points, ...): a colliding edge of a search usually shows it within a few checks,
-    wherever the obstacle lies (one at a time: checking the levels of the bisection in batches
-    (``sphere_batch``) measured no faster, the search's edges being short). With certificates
-    worth having (``step`` below ``_MARCH_BELOW``), samples after the end are checked in order
-    instead, each FREE one certifying those within its radius."""
-    work, lam, q, counter, anchors, anchor_radius = scratch
+    ``end_known``: a waypoint, checked already), then the inner sample nearest to one of the
+    last samples that blocked an edge (within ``_WITNESS_RADIUS``: the shortcuts' and the
+    greedy passes' candidate edges mostly run past the obstacle that blocked the one before),
+    then the others in bisection order (midpoint, quarter points, ...): a colliding edge of a
+    search usually shows it within a few checks, wherever the obstacle lies (one at a time:
+    checking the levels of the bisection in batches (``sphere_batch``) measured no faster, the
+    search's edges being short). The order changes how many checks a blocked edge costs, never
+    the answer. With certificates worth having (``step`` below ``_MARCH_BELOW``), samples
+    after the end are checked in order instead, each FREE one certifying those within its
+    radius."""
+    work, lam, q, counter, anchors, anchor_radius, witnesses, ring = scratch
     if not end_known:
         first, n = edge_prefix(q_b, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
         if first < n:
+            _remember(q_b, witnesses, ring)
             return False
     if step < _MARCH_BELOW:
         first, n = edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius)
         return first == n
-    length = 0.0
+    length2 = 0.0
     for j in range(len(q_a)):
-        length += (q_b[j] - q_a[j]) ** 2
-    if not np.isfinite(length):
+        length2 += (q_b[j] - q_a[j]) ** 2
+    if not np.isfinite(length2):
         return False
-    n = max(1, int(np.ceil(np.sqrt(length) / step)))
+    n = max(1, int(np.ceil(np.sqrt(length2) / step)))
+    witness = _nearest_sample(q_a, q_b, length2, n, witnesses, ring) if n > 1 else -1
     stride = 1
     while stride < n:
         stride *= 2
+    alone = witness > 0  # the witness's sample first, alone; then the bisection without it
     while stride > 1:
         half = stride // 2
-        for i in range(half, n, stride):  # the samples i/n not visited at coarser strides
+        start, stop, by = (witness, witness + 1, 1) if alone else (half, n, stride)
+        for i in range(start, stop, by):
+            if i == witness and not alone:
+                continue
             t = i / n
             for j in range(len(q_a)):
                 q[j] = q_a[j] + t * (q_b[j] - q_a[j])
             state = _classify_one(q, d, True, work, lam)[0]
             counter[0] += 1
             if state != FREE and not (state == UNKNOWN and _near_any(q, anchors, anchor_radius)):
+                _remember(q, witnesses, ring)
                 return False
-        stride = half
+        if alone:
+            alone = False
+        else:
+            stride = half
     return True
 
 
@@ -269,7 +317,7 @@ def _rrt_connect(
                 if gap <= 1e-9:
                     reached = other
                 else:
-                    work, lam, q, _, anchors, anchor_radius = scratch
+                    work, lam, q, _, anchors, anchor_radius, _, _ = scratch
                     first, n = edge_prefix(
                         nodes[b][other],
                         q_new,
@@ -467,8 +515,9 @@ def _fine_check(path, step, d, counter):
 @njit(cache=True)
 def make_scratch(d, dim, anchors, anchor_radius):
     """The scratch arrays of a search's edge checks: the scalar kernel's (``_work``), the speed
-    bounds (L + Q,), a configuration (dim,), the count of configurations classified (1,), and
-    the ``anchors`` (K, dim) and ``anchor_radius`` (rad) of ``edge_prefix``."""
+    bounds (L + Q,), a configuration (dim,), the count of configurations classified (1,), the
+    ``anchors`` (K, dim) and ``anchor_radius`` (rad) of ``edge_prefix``, and the last samples
+    that blocked an edge (``_WITNESSES``, dim) with their count and next row (2,) (``_free``)."""
     return (
         _work(d),
         np.zeros(len(d.body_step) + len(d.body_pair)),
@@ -476,6 +525,8 @@ def make_scratch(d, dim, anchors, anchor_radius):
         np.zeros(1, dtype=np.int64),
         anchors,
         anchor_radius,
+        np.zeros((_WITNESSES, dim)),
+        np.zeros(2, dtype=np.int64),
     )
 
 
@@ -603,7 +654,7 @@ def solve(
     checks = 0
     if check_ends:
         scratch = make_scratch(d, dim, unknown, 0.0)  # no anchors: UNKNOWN blocks
-        work, lam, q, counter, anchors, _ = scratch
+        work, lam, q, counter, anchors, _, _, _ = scratch
         for k in range(2):
             end = q_start if k == 0 else q_goal
             first, n = edge_prefix(end, end, 1.0, d, work, lam, q, counter, anchors, 0.0)

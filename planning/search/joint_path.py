@@ -147,10 +147,11 @@ class JointPathSearch:
         opts = self._options
         if time.perf_counter() > deadline:
             raise self._failure(deadline, "no time was left to search")
-        if check_ends is not None and not (self.fused and self._compiled_model() is not None):
+        model = self._compiled_model()
+        if check_ends is not None and not (self.fused and model is not None):
             check_ends(not self.proves_free(q_start), not self.proves_free(q_goal))
             check_ends = None
-        compiled = self._compiled(q_start, q_goal, deadline, check_ends)
+        compiled = self._compiled(model, q_start, q_goal, deadline, check_ends)
         if compiled is not None and compiled[0] is not None:
             return compiled[0], compiled[1]
         adapter = self.adapter(search=True)
@@ -199,10 +200,11 @@ class JointPathSearch:
             return None
         return self._sphere_model()
 
-    def _compiled(self, q_start, q_goal, deadline: float, check_ends=None):
+    def _compiled(self, model, q_start, q_goal, deadline: float, check_ends=None):
         """The compiled search and its fine check (``planning.search.compiled_rrt.solve``: one
         call, the ends' sphere check first when ``check_ends`` is given, see ``find``), with up
-        to ``validation.max_repairs`` compiled repairs of a segment that fails it.
+        to ``validation.max_repairs`` compiled repairs of a segment that fails it; ``model`` is
+        ``_compiled_model()``.
 
         Returns:
             None when it does not apply (``_compiled_model``); else (path, how, None) for a
@@ -210,7 +212,6 @@ class JointPathSearch:
             (None, "rrt_connect", None) when the search gave up.
         """
         opts = self._options
-        model = self._compiled_model()
         if model is None:
             return None
         data = model.kernel_data()
@@ -256,6 +257,8 @@ class JointPathSearch:
                 )  # raises when one collides
                 result = compiled_rrt.solve(q_start, q_goal, *packed, False, fine)
             status, path, how, _, _, bad, unknown, segment = result
+            if status == compiled_rrt.FOUND and bad < 0 and len(unknown) == 0:
+                return path, "straight" if how == 0 else "rrt_connect", None  # the usual case
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
             status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *arguments(*search))

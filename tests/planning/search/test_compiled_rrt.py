@@ -264,3 +264,38 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
     expected = ~mut.hull_kernel.prove_free(alone[6], data, model.hull_data())
     assert len(left) == int(expected.sum()) < len(alone[6])
     assert len(segment) == len(unknown_left)
+
+
+@njit
+def _free_after(q_a, q_b, d, blocked):
+    """``_free(q_a, q_b)`` (end known) after the edges ``blocked`` (K, 2, 7) were checked with
+    the same scratch arrays, and the configurations it classified."""
+    scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0)
+    for k in range(len(blocked)):
+        mut._free(blocked[k, 0], blocked[k, 1], 0.1, d, scratch)
+    before = scratch[3][0]
+    free = mut._free(q_a, q_b, 0.1, d, scratch, True)
+    return free, scratch[3][0] - before
+
+
+def test_an_edge_passing_a_sample_that_blocked_another_is_checked_there_first(data, ends):
+    """``_free`` checks first the sample nearest to a remembered blocking one: an edge running
+    past the wall where the edge before was blocked costs one check. The order never changes
+    the answer: random edges get the same one with and without other edges checked before."""
+    start, goal = ends
+    wall = (start + goal) / 2.0  # "ready", in the wall
+    none = np.empty((0, 2, 7))
+    first = np.array([[start, wall]])  # blocked at its end, remembered
+    # A longer edge through the wall's side (it spans joint 1 from about -0.7 to 0.5 rad about
+    # "ready"), its midpoint past the wall: the bisection meets the wall at the second check.
+    q_a, q_b = wall - 0.8 * E[0] + 0.02 * E[1], wall + 2.4 * E[0] + 0.02 * E[1]
+    fresh = _free_after(q_a, q_b, data, none)
+    remembered = _free_after(q_a, q_b, data, first)
+    assert not fresh[0] and not remembered[0]
+    assert remembered[1] == 1 < fresh[1]
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        before = np.array([[start, wall], [goal, wall + rng.normal(0.0, 0.1, 7)]])
+        q_a = rng.choice([start, goal]) + rng.normal(0.0, 0.3, 7)
+        q_b = wall + rng.normal(0.0, 0.6, 7)
+        assert _free_after(q_a, q_b, data, none)[0] == _free_after(q_a, q_b, data, before)[0]
