@@ -257,8 +257,6 @@ class JointPathSearch:
                 )  # raises when one collides
                 result = compiled_rrt.solve(q_start, q_goal, *packed, False, fine)
             status, path, how, _, _, bad, unknown, segment = result
-            if status == compiled_rrt.FOUND and bad < 0 and len(unknown) == 0:
-                return path, "straight" if how == 0 else "rrt_connect", None  # the usual case
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
             status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *arguments(*search))

@@ -139,9 +139,8 @@ def test_after_a_repair_only_the_new_piece_and_what_follows_are_checked_again(
         seen.append(path.copy())
         return 1 if len(seen) == 1 else -1  # the segment middle[0] -> middle[1], once
 
-    def found(q_a, q_b, *args):  # the solve's 8 outputs: its fine check found segment 1 bad,
-        # which ``failing`` (standing for the whole fine check) then says
-        return (mut.compiled_rrt.FOUND, searched, 1, 0, 0, 1, np.empty((0, 7)), np.empty(0))
+    def found(q_a, q_b, *args):  # the solve's 8 outputs, its fine check left to ``failing``
+        return (mut.compiled_rrt.FOUND, searched, 1, 0, 0, -1, np.empty((0, 7)), np.empty(0))
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", found)
     monkeypatch.setattr(mut.compiled_rrt, "plan", lambda *a: (mut.compiled_rrt.FOUND, piece, 1, 0))
