@@ -19,19 +19,10 @@ import numpy as np
 import pytest
 
 from planning import MotionPlanner, PlanningScene
-from planning.benchmark import problems_folder
+from planning.benchmark import _load, problems_folder
 from planning.io import mbm
-from planning.model.layout import ARM_Q, FINGER_Q
 
 RECORDED = Path(__file__).parent / "data" / "mbm_paths.json"
-
-
-def _load(scene, problem):
-    """The problem's scene loaded; its start and goal arm joints."""
-    scene.load_moveit(problem.scene_file)
-    request = mbm.load_request(problem.request_file)
-    scene.finger_positions = request.q_start[FINGER_Q]
-    return request.q_start[ARM_Q], request.q_goal[ARM_Q]
 
 
 def _plan(planner, q_start, q_goal):
