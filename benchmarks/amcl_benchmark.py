@@ -17,11 +17,13 @@ filter (``config/amcl.yaml``) localises on the arena's ground-truth 0.05 m map. 
 The costs include the scan-to-map refinement of the shipped config (``--no-refinement``: the
 filter alone).
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the figures for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
 import dataclasses as dc
+import json
 import math
 import os
 import platform
@@ -32,6 +34,8 @@ from pathlib import Path
 import numpy as np
 from slam_benchmark import route_poses
 
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.systems.estimation.amcl import default_amcl_config_file, load_amcl_config
 from drake_sim.systems.estimation.particle_filter import ParticleFilter, wrap
 from drake_sim.systems.estimation.scan_matching_slam import compose, relative
@@ -120,6 +124,48 @@ def guess_offset(seed: int) -> np.ndarray:
     return np.array([0.5 * math.cos(direction), 0.5 * math.sin(direction), sign * math.radians(30)])
 
 
+def figures(rows: list[dict], global_row: dict, seeds: int) -> dict:
+    """The per-arena rows and the global localisation's as ``--json`` figures (times that never
+    settled as null)."""
+    columns = [
+        ["arena", "arena", "", ""],
+        ["fixed_ms", "update, 2000 particles, median", "ms", ".2f"],
+        ["fixed_p95_ms", "p95", "ms", ".2f"],
+        ["shipped_ms", "update, shipped config, median", "ms", ".2f"],
+        ["settled_s", "settled after, per seed", "s", ".1f"],
+        ["max_error_m", "largest error after 10 s", "m", ".3f"],
+        ["max_error_deg", "largest heading error after 10 s", "deg", ".2f"],
+    ]
+    global_columns = [
+        ["arena", "arena", "", ""],
+        ["particles", "particles", "", "d"],
+        ["settled_s", "settled after, per seed", "s", ".1f"],
+        ["first_update_ms", "first update, last seed", "ms", ".1f"],
+    ]
+    settled = "settled: the error stays under 5 cm and 3 degrees from then on (- never)"
+    return {
+        "settings": {"seeds": seeds},
+        "figures": {f"{r['arena']}_fixed_ms": r["fixed_ms"] for r in rows},
+        "tables": [
+            {
+                "title": f"Tracking from a guess 0.5 m and 30 degrees off, seeds 1 to {seeds}",
+                "columns": columns,
+                "rows": rows,
+                "note": f"Costs over every update of every seed; {settled}.",
+            },
+            {
+                "title": "Global localisation (particles over all the free space)",
+                "columns": global_columns,
+                "rows": [global_row],
+            },
+        ],
+    }
+
+
+def _finite(seconds: float) -> float | None:
+    return seconds if math.isfinite(seconds) else None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--arena", type=Path, action="append", help="default: all shipped")
@@ -127,6 +173,7 @@ def main() -> None:
     parser.add_argument(
         "--no-refinement", action="store_true", help="without the scan-to-map refinement"
     )
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
@@ -143,6 +190,7 @@ def main() -> None:
         f"{'arena':>10} {'2000 p: ms':>11} {'p95 ms':>7} {'shipped ms':>11}"
         f" {'settled s (per seed)':>28} {'max err >10 s: m, deg':>22}"
     )
+    arena_rows = []
     for path in args.arena or shipped_arenas():
         fixed_costs, shipped_costs, settled, worst = [], [], [], [0.0, 0.0]
         for seed in range(1, args.seeds + 1):
@@ -165,6 +213,17 @@ def main() -> None:
             f" {' '.join(f'{s:.1f}' for s in settled):>28}"
             f" {worst[0]:>15.3f}, {worst[1]:.2f}"
         )
+        arena_rows.append(
+            {
+                "arena": path.stem,
+                "fixed_ms": 1e3 * statistics.median(fixed_costs),
+                "fixed_p95_ms": 1e3 * float(np.percentile(fixed_costs, 95)),
+                "shipped_ms": 1e3 * statistics.median(shipped_costs),
+                "settled_s": [_finite(s) for s in settled],
+                "max_error_m": float(worst[0]),
+                "max_error_deg": float(worst[1]),
+            }
+        )
     room = next(p for p in shipped_arenas() if p.stem == "room")
     times = []
     for seed in range(1, args.seeds + 1):
@@ -178,6 +237,15 @@ def main() -> None:
         f"{', '.join(f'{t:.1f}' for t in times)} s of driving (first update "
         f"{1e3 * costs[0]:.1f} ms)"
     )
+    if args.json:
+        global_row = {
+            "arena": room.stem,
+            "particles": config.max_particles,
+            "settled_s": [_finite(t) for t in times],
+            "first_update_ms": 1e3 * costs[0],
+        }
+        result = figures(arena_rows, global_row, args.seeds)
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -12,10 +12,12 @@ repeats (ms):
 * ``plan_path`` across the map (A* and Dijkstra), between random free points, and to an
   unreachable goal (a fail costs one sweep of the start's free space).
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the table for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
+import json
 import math
 import os
 import platform
@@ -25,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena
 from drake_sim.worlds.footprints import Footprint, cast_rays, clearance
@@ -44,9 +48,10 @@ def timed(function, repeats: int) -> tuple[float, object]:
     return statistics.median(times), result
 
 
-def row(label: str, ms: float, extra: str = "") -> None:
-    """Prints one aligned line of the table."""
+def row(label: str, ms: float, extra: str = "") -> dict:
+    """Prints one aligned line of the table; returns it as a row of the JSON table."""
     print(f"{label:<38}{ms:9.3f} ms" + (f"  ({extra})" if extra else ""), flush=True)
+    return {"operation": label, "median_ms": ms, "details": extra or None}
 
 
 def free_points(arena, rng, count: int, margin: float = 0.3) -> np.ndarray:
@@ -66,6 +71,7 @@ def main() -> None:
     parser.add_argument("--arena", type=Path, default=config_dir() / "arenas" / "warehouse.yaml")
     parser.add_argument("--resolution", type=float, default=0.05, help="m per cell")
     parser.add_argument("--repeats", type=int, default=20)
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
@@ -81,10 +87,10 @@ def main() -> None:
     plan_path(Costmap.from_map(grid), *free_points(arena, rng, 2))  # numba: load or compile
 
     ms, costmap = timed(lambda: Costmap.from_map(grid), args.repeats)
-    row("from_map (static + inflation)", ms)
+    rows = [row("from_map (static + inflation)", ms)]
     lethal = costmap.lethal_mask()
     ms, _ = timed(lambda: inflate(lethal, grid.resolution, costmap.config), args.repeats)
-    row("inflate, whole map", ms)
+    rows.append(row("inflate, whole map", ms))
 
     box = Footprint("box", "new", (0.0, -2.0), (0.3, 0.3), 0.0, 0.0, 0.5)
     footprints = [*arena_footprints(arena), box]
@@ -96,15 +102,17 @@ def main() -> None:
         begin = time.perf_counter()
         costmap.update_scan((*pose, 0.0), ranges, angles, RANGE_MAX)
         times.append(1e3 * (time.perf_counter() - begin))
-    row(
-        f"update_scan ({BEAMS} beams, {RANGE_MAX} m)",
-        statistics.median(times),
-        f"max {max(times):.3f} ms",
+    rows.append(
+        row(
+            f"update_scan ({BEAMS} beams, {RANGE_MAX} m)",
+            statistics.median(times),
+            f"max {max(times):.3f} ms",
+        )
     )
     ms, _ = timed(lambda: costmap.local_window(poses[0]), args.repeats)
-    row(f"local_window ({costmap.config.local_width} m)", ms)
+    rows.append(row(f"local_window ({costmap.config.local_width} m)", ms))
     ms, _ = timed(costmap.clear_obstacles, args.repeats)
-    row("clear_obstacles", ms)
+    rows.append(row("clear_obstacles", ms))
 
     costmap = Costmap.from_map(grid)
     half = 0.5 * np.asarray(arena.size) - 0.4
@@ -114,15 +122,19 @@ def main() -> None:
         ("Dijkstra", GlobalPlannerConfig(use_astar=False)),
     ):
         ms, path = timed(lambda config=config: plan_path(costmap, *corners, config), args.repeats)
-        row(
-            f"plan_path {name}, corner to corner",
-            ms,
-            f"{path.length_m:.2f} m, {len(path.path)} points, {path.expanded} cells expanded, "
-            f"{path.message or 'ok'}",
+        rows.append(
+            row(
+                f"plan_path {name}, corner to corner",
+                ms,
+                f"{path.length_m:.2f} m, {len(path.path)} points, {path.expanded} cells expanded, "
+                f"{path.message or 'ok'}",
+            )
         )
     pairs = free_points(arena, rng, 2 * args.repeats).reshape(-1, 2, 2)
     times = [plan_path(costmap, a, b).planning_time_s * 1e3 for a, b in pairs]
-    row("plan_path A*, random pairs", statistics.median(times), f"max {max(times):.3f} ms")
+    rows.append(
+        row("plan_path A*, random pairs", statistics.median(times), f"max {max(times):.3f} ms")
+    )
     walled = Costmap.from_map(grid)
     goal = poses[0]
     r, c = walled.cell_of(goal)
@@ -133,7 +145,27 @@ def main() -> None:
     walled.clear_obstacles()
     start = next(p for p in poses[1:] if np.linalg.norm(p - goal) > 1.0)
     ms, fail = timed(lambda: plan_path(walled, start, goal), args.repeats)
-    row("plan_path to a walled-in goal", ms, f"{fail.message}, {fail.expanded} cells expanded")
+    rows.append(
+        row("plan_path to a walled-in goal", ms, f"{fail.message}, {fail.expanded} cells expanded")
+    )
+    if args.json:
+        size = f"{grid.shape[1]} x {grid.shape[0]} cells at {args.resolution:g} m"
+        columns = [
+            ["operation", "operation", "", ""],
+            ["median_ms", "median", "ms", ".3f"],
+            ["details", "details", "", ""],
+        ]
+        table = {
+            "title": f"{args.arena.stem}: map {size}, medians of {args.repeats} repeats",
+            "columns": columns,
+            "rows": rows,
+        }
+        result = {
+            "settings": {"arena": args.arena.stem, "resolution_m": args.resolution},
+            "figures": {r["operation"]: r["median_ms"] for r in rows},
+            "tables": [table],
+        }
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -2,15 +2,19 @@
 
 Runs the default scenario (config/flip.yaml, config/ddrive.yaml) headless for 20 simulated
 seconds, several times, and prints each run's flips, lateral drift, odometry error and
-real-time factor, then their medians. Not a test: speeds depend on the machine.
+real-time factor, then their medians; ``--json FILE`` also writes them for
+``python -m benchmarks.report``. Not a test: speeds depend on the machine.
 """
 
 import argparse
+import json
 import os
 import platform
 import statistics
 
 from diagrams.flip_scenario import load_flip_scenario
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
 from drake_sim.flip_run import FlipRun
 from drake_sim.robots.ddrive import default_robot_file
@@ -26,12 +30,50 @@ COLUMNS = (
     ("wall_s", "wall_time_s", "{:.2f}"),
     ("rtf", "real_time_factor", "{:.1f}"),
 )
+"""(printed name, report key, format) of each column."""
+
+HEADERS = {
+    "flips": ("flips", ""),
+    "max_lateral_deviation_m": ("largest drift off the line", "m"),
+    "travel_extent_m": ("travel extent", "m"),
+    "odometry_error_m": ("odometry error", "m"),
+    "naive_odometry_error_m": ("naive odometry error", "m"),
+    "distance_travelled_m": ("distance travelled", "m"),
+    "wall_time_s": ("wall time", "s"),
+    "real_time_factor": ("real-time factor", "x"),
+}
+"""(header, unit) of each column in the JSON figures."""
+
+
+def figures(rows: list[dict], duration: float) -> dict:
+    """The runs' figures for ``--json``: settings, the medians, and a table of the runs."""
+    medians = {key: statistics.median(r[key] for r in rows) for _, key, _ in COLUMNS}
+    # "{:.3f}" is the format spec ".3f".
+    columns = [["run", "run", "", ""]] + [
+        [key, *HEADERS[key], fmt[2:-1]] for _, key, fmt in COLUMNS
+    ]
+    table_rows = [
+        {"run": str(index), **{key: row[key] for _, key, _ in COLUMNS}}
+        for index, row in enumerate(rows, 1)
+    ]
+    return {
+        "settings": {"runs": len(rows), "duration_s": duration},
+        "figures": medians,
+        "tables": [
+            {
+                "title": f"{len(rows)} runs of {duration:g} simulated s, and their medians",
+                "columns": columns,
+                "rows": [*table_rows, {"run": "median", **medians}],
+            }
+        ],
+    }
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     scenario = load_flip_scenario(config_dir() / "flip.yaml")
     robot = load_robot_params(default_robot_file())
@@ -44,8 +86,11 @@ def main() -> None:
         row = run.report().to_dict()
         rows.append(row)
         print(" ".join(f"{fmt.format(row[key]):>12}" for _, key, fmt in COLUMNS))
-    medians = {key: statistics.median(r[key] for r in rows) for _, key, _ in COLUMNS}
+    result = figures(rows, args.duration)
+    medians = result["figures"]
     print(" ".join(f"{fmt.format(medians[key]):>12}" for _, key, fmt in COLUMNS), "(median)")
+    if args.json:
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

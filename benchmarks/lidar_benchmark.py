@@ -13,11 +13,13 @@ On an arena-like scene built here (a 6 m x 5 m room walled by boxes, ``--boxes``
 
 each with its error against an exact 2D reference computed here (segments and circles in the
 scan plane): the largest and the 99th percentile of |range - exact| over all beams with a finite
-exact range, and the beams one reports finite and the other not. Prints the machine too.
+exact range, and the beams one reports finite and the other not. Prints the machine too;
+``--json FILE`` also writes the figures for ``python -m benchmarks.report``.
 Not a test: times depend on the machine.
 """
 
 import argparse
+import json
 import math
 import os
 import platform
@@ -44,6 +46,8 @@ from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.sensors import CameraInfo
 
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.systems.sensors.lidar import (
     Lidar,
     LidarConfig,
@@ -181,14 +185,36 @@ def depth_render_ranges(query_object, X_WL, angles, pixels, range_max):
     return np.where(ranges <= range_max, ranges, np.inf)
 
 
-def errors(measured, exact) -> str:
+def error_stats(measured, exact) -> dict:
+    """|measured - exact| over the beams finite in both: max and 99th percentile (mm); the
+    beams finite in one and not the other, and all the beams."""
     both = np.isfinite(measured) & np.isfinite(exact)
     err = np.abs(measured[both] - exact[both])
-    mismatch = int(np.sum(np.isfinite(measured) != np.isfinite(exact)))
+    return {
+        "max_error_mm": float(err.max() * 1e3),
+        "p99_error_mm": float(np.percentile(err, 99) * 1e3),
+        "mismatched_beams": int(np.sum(np.isfinite(measured) != np.isfinite(exact))),
+        "beams": len(exact),
+    }
+
+
+def errors(stats: dict) -> str:
     return (
-        f"max {err.max() * 1e3:.3g} mm, p99 {np.percentile(err, 99) * 1e3:.3g} mm, "
-        f"{mismatch} of {len(exact)} beams finite in one and not the other"
+        f"max {stats['max_error_mm']:.3g} mm, p99 {stats['p99_error_mm']:.3g} mm, "
+        f"{stats['mismatched_beams']} of {stats['beams']} beams finite in one and not the other"
     )
+
+
+COLUMNS = [
+    ["method", "method", "", ""],
+    ["median_ms", "median per scan", "ms", ".3f"],
+    ["scans", "scans timed", "", "d"],
+    ["max_error_mm", "largest error", "mm", ".3g"],
+    ["p99_error_mm", "p99 error", "mm", ".3g"],
+    ["mismatched_beams", "beams finite in one only", "", "d"],
+    ["beams", "beams compared", "", "d"],
+]
+"""(key, header, unit, format) of the ``--json`` table's columns."""
 
 
 def main() -> None:
@@ -197,6 +223,7 @@ def main() -> None:
     parser.add_argument("--boxes", type=int, default=30)
     parser.add_argument("--cylinders", type=int, default=8)
     parser.add_argument("--pixels", type=int, default=360, help="columns per depth camera")
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     print(f"machine: {platform.platform()}, {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cpus, python {platform.python_version()}")  # fmt: skip
@@ -253,13 +280,17 @@ def main() -> None:
                 times["depth renders"].append(time.perf_counter() - start)
             results["depth renders"].append((rendered, exact))
         print(f"ray casting: first scan (builds the cache) {first_scan_ms:.2f} ms")
+        rows = []
         for name in ("ray casting", "scan_now", "depth renders"):
             t = times[name]
             line = f"{name}: median {statistics.median(t) * 1e3:.3f} ms per scan ({len(t)} scans)"
+            row = {"method": name, "median_ms": statistics.median(t) * 1e3, "scans": len(t)}
             if name in results:
                 measured = np.concatenate([m for m, _ in results[name]])
                 exact = np.concatenate([e for _, e in results[name]])
-                line += "; error " + errors(measured, exact)
+                row.update(error_stats(measured, exact))
+                line += "; error " + errors(row)
+            rows.append(row)
             print(line)
         sick_context, t = sick_lidar.GetMyContextFromRoot(context), []
         for _ in range(args.scans // 4):
@@ -270,6 +301,28 @@ def main() -> None:
             f"ray casting, sick_tim571 preset ({sick.samples} beams, {sick.range_max} m): "
             f"median {statistics.median(t) * 1e3:.3f} ms per scan"
         )
+    rows[0]["method"] = "ray casting (Lidar.exact_ranges)"
+    rows[1]["method"] = "scan_now (ray casting, noise, LaserScan)"
+    rows[2]["method"] = f"depth renders (4 VTK cameras, {args.pixels} x 3 pixels)"
+    sick_row = {"median_ms": statistics.median(t) * 1e3, "scans": len(t)}
+    rows.append({"method": f"ray casting, sick_tim571 ({sick.samples} beams)", **sick_row})
+    if args.json:
+        scene = (
+            f"{len(rects)} boxes (4 walls), {len(circles)} cylinders, a mesh of {triangles} "
+            f"triangles; {config.samples} beams, range_max {config.range_max:g} m"
+        )
+        table = {
+            "title": f"Per method, {len(poses)} poses: {scene}",
+            "columns": COLUMNS,
+            "rows": rows,
+            "note": f"The first ray-cast scan (it builds the cache): {first_scan_ms:.0f} ms.",
+        }
+        result = {
+            "settings": {"scans": args.scans, "pixels": args.pixels},
+            "figures": {"ray_casting_ms": rows[0]["median_ms"], "first_scan_ms": first_scan_ms},
+            "tables": [table],
+        }
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -10,10 +10,12 @@ the LDS-01's 360 beams at 5 Hz), headless, on every shipped arena with its defau
   3 times smaller than the odometry's final error);
 * the lidar alone: the median cost of one 360-beam scan in each arena, from the robot's start.
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the figures for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
+import json
 import os
 import platform
 import statistics
@@ -24,6 +26,8 @@ from pydrake.systems.analysis import Simulator
 
 from diagrams.mapping import make_mapping_diagram
 from diagrams.mapping_scenario import default_scenario_file, load_mapping_scenario
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.mapping_run import MappingReport, MappingRun
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
@@ -60,10 +64,63 @@ def lidar_cost_ms(scenario, robot, arena) -> float:
     return 1000 * statistics.median(times)
 
 
+RUN_COLUMNS = [
+    ["arena", "arena", "", ""],
+    ["seed", "seed", "", "d"],
+    ["map_iou", "map IoU", "", ".3f"],
+    ["known_fraction", "known", "", ".3f"],
+    ["pose_rmse_m", "pose RMSE", "m", ".3f"],
+    ["odometry_final_error_m", "odometry's final error", "m", ".3f"],
+    ["ratio", "odometry error / RMSE", "", ".1f"],
+    ["sim_time_s", "simulated", "s", ".1f"],
+    ["real_time_factor", "real-time factor", "x", ".2f"],
+    ["accepted", "accepted", "", ""],
+]
+"""(key, header, unit, format) of the ``--json`` per-run table."""
+
+ARENA_COLUMNS = [
+    ["arena", "arena", "", ""],
+    ["real_time_factor", "median real-time factor", "x", ".2f"],
+    ["all_accepted", "every run accepted", "", ""],
+    ["lidar_ms", "lidar, median per scan", "ms", ".3f"],
+]
+"""(key, header, unit, format) of the ``--json`` per-arena table."""
+
+
+def figures(runs: list[dict], arenas: list[dict], settings: dict) -> dict:
+    """The runs and the per-arena summaries as ``--json`` figures."""
+    accept = (
+        "Accepted: the route done, IoU >= 0.9, known >= 0.95, RMSE <= 0.05 m and at least 3 "
+        "times smaller than the odometry's final error."
+    )
+    return {
+        "settings": settings,
+        "figures": {
+            "real_time_factor": statistics.median(r["real_time_factor"] for r in runs),
+            "min_map_iou": min(r["map_iou"] for r in runs),
+            "max_pose_rmse_m": max(r["pose_rmse_m"] for r in runs),
+        },
+        "tables": [
+            {
+                "title": f"Per run ({settings['runs']} seeds per arena, its default route)",
+                "columns": RUN_COLUMNS,
+                "rows": runs,
+                "note": accept,
+            },
+            {
+                "title": f"Per arena (the lidar: median of {LIDAR_SCANS} scans from the start)",
+                "columns": ARENA_COLUMNS,
+                "rows": arenas,
+            },
+        ],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=3, help="runs per arena (seeds 0, 1, ...)")
     parser.add_argument("--arenas", nargs="*", help="arena names (default: every shipped one)")
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     scenario = load_mapping_scenario(default_scenario_file())
     robot = load_turtlebot3_params(default_turtlebot3_file())
@@ -77,7 +134,7 @@ def main() -> None:
     )
     header = "arena      seed   iou  known  rmse_m  odom_m  ratio   sim_s    rtf  ok"
     print(header)
-    summary = []
+    summary, runs = [], []
     for path in arenas:
         arena = load_arena(path)
         waypoints = load_route(default_route_file(path), arena).waypoints
@@ -90,6 +147,8 @@ def main() -> None:
             passed &= ok
             factors.append(r.real_time_factor)
             ratio = r.odometry_final_error_m / r.pose_rmse_m if r.pose_rmse_m > 0 else np.inf
+            scores = {key: getattr(r, key) for key, *_ in RUN_COLUMNS if hasattr(r, key)}
+            runs.append({"arena": path.stem, "ratio": float(ratio), "accepted": ok, **scores})
             print(
                 f"{path.stem:<10} {seed:>4} {r.map_iou:5.3f} {r.known_fraction:6.3f} "
                 f"{r.pose_rmse_m:7.3f} {r.odometry_final_error_m:7.3f} {ratio:6.1f} "
@@ -104,6 +163,12 @@ def main() -> None:
         print(
             f"  {name:<10} {factor:5.2f}x  {'all runs pass' if passed else 'FAILED'}  {cost:.3f} ms"
         )
+    if args.json:
+        keys = [key for key, *_ in ARENA_COLUMNS]
+        arena_rows = [dict(zip(keys, row, strict=True)) for row in summary]
+        settings = {"runs": args.runs, "lidar_beams": lidar.samples, "lidar_rate_hz": lidar.rate}
+        result = figures(runs, arena_rows, settings)
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -12,11 +12,13 @@ ground-truth map (what a perfect mapping run saves; ``--map-dir`` takes saved ma
   the worst time over driven length / the robot's top speed (target <= 2.5), the real-time factor;
 * AMCL alone: the median cost of one filter update with 2000 particles (target < 5 ms).
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the figures for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
 import dataclasses as dc
+import json
 import math
 import os
 import platform
@@ -28,6 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.base.map_files import load_map, save_map
 from drake_sim.navigation_run import NavigationRun
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
@@ -68,11 +72,60 @@ def amcl_cost_ms(scenario, occupancy_map, arena, scan_config) -> float:
     return 1000 * statistics.median(times)
 
 
+RUN_COLUMNS = [
+    ["run", "run", "", ""],
+    ["sim_time_s", "simulated", "s", ".1f"],
+    ["wall_time_s", "wall time", "s", ".1f"],
+    ["real_time_factor", "real-time factor", "x", ".2f"],
+    ["reached", "goals reached", "", ""],
+]
+"""(key, header, unit, format) of the ``--json`` table of the room's runs."""
+
+ARENA_COLUMNS = [
+    ["arena", "arena", "", ""],
+    ["reached", "reached", "", ""],
+    ["max_position_error_m", "largest position error", "m", ".3f"],
+    ["max_yaw_error_deg", "largest heading error", "deg", ".2f"],
+    ["collisions", "collisions", "", "d"],
+    ["min_clearance_m", "smallest clearance", "m", ".3f"],
+    ["worst_time_ratio", "worst time / (length / top speed)", "", ".2f"],
+    ["real_time_factor", "real-time factor", "x", ".2f"],
+]
+"""(key, header, unit, format) of the ``--json`` table of the random goals."""
+
+
+def figures(runs: list[dict], arenas: list[dict], amcl_ms: float, settings: dict) -> dict:
+    """The room's runs, the random goals per arena and AMCL's cost as ``--json`` figures."""
+    median = statistics.median(r["real_time_factor"] for r in runs)
+    return {
+        "settings": settings,
+        "figures": {"real_time_factor": median, "amcl_update_ms": amcl_ms},
+        "tables": [
+            {
+                "title": f"The room's goals, {len(runs)} runs (seeds 0, 1, ...)",
+                "columns": RUN_COLUMNS,
+                "rows": [*runs, {"run": "median", "real_time_factor": median}],
+            },
+            {
+                "title": f"{settings['goals']} random goals per arena (seed 7)",
+                "columns": ARENA_COLUMNS,
+                "rows": arenas,
+                "note": (
+                    f"Errors over the goals reached, against the truth. AMCL alone: "
+                    f"{amcl_ms:.2f} ms per update with 2000 particles (median of "
+                    f"{AMCL_UPDATES})."
+                ),
+            },
+        ],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=3, help="timed runs of the room's goals")
     parser.add_argument("--goals", type=int, default=10, help="random goals per arena")
     parser.add_argument("--map-dir", type=Path, help="saved maps <arena>.yaml (default: truth)")
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     scenario = load_navigation_scenario(default_scenario_file())
     robot = load_turtlebot3_params(default_turtlebot3_file())
@@ -98,10 +151,13 @@ def main() -> None:
         np.array([g.x, g.y, math.radians(g.yaw)])
         for g in load_goals(default_goals_file(room_file), room)
     ]
-    factors = []
+    factors, runs, arena_rows = [], [], []
     for index in range(args.runs):
         _, report = run_goals(scenario, robot, room, maps["room"], room_goals, seed=index)
         factors.append(report.real_time_factor)
+        reached = f"{sum(g.reached for g in report.goals)}/{len(room_goals)}"
+        times = {key: getattr(report, key) for key, *_ in RUN_COLUMNS[1:4]}
+        runs.append({"run": str(index + 1), "reached": reached, **times})
         print(
             f"  room goals run {index + 1}: {report.sim_time_s:.1f} s simulated in "
             f"{report.wall_time_s:.1f} s: {report.real_time_factor:.2f}x, reached "
@@ -130,8 +186,25 @@ def main() -> None:
             f"{r.real_time_factor:6.2f}",
             flush=True,
         )
+        arena_rows.append(
+            {
+                "arena": path.stem,
+                "reached": f"{len(reached)}/{len(goals)}",
+                "max_position_error_m": max((g.position_error_m for g in reached), default=None),
+                "max_yaw_error_deg": max((g.yaw_error_deg for g in reached), default=None),
+                "collisions": r.collisions,
+                "min_clearance_m": r.min_clearance_m,
+                "worst_time_ratio": worst,
+                "real_time_factor": r.real_time_factor,
+            }
+        )
     cost = amcl_cost_ms(scenario, maps["room"], room, scenario.lidar)
     print(f"AMCL update with 2000 particles: {cost:.2f} ms median (target < 5)")
+    if args.json:
+        maps_used = f"saved, {args.map_dir}" if args.map_dir else "ground truth"
+        settings = {"runs": args.runs, "goals": args.goals, "maps": maps_used}
+        result = figures(runs, arena_rows, cost, settings)
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

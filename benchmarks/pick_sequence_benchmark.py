@@ -10,9 +10,11 @@ goal 15 cm above the place, over the obstacle) and ``down`` (Cartesian, the obje
 its target). Each
 repeat uses a fresh ``MotionPlanner`` on a freshly loaded scene. Prints each step's planning
 time (median over the repeats) and the median total; exit code 1 when a step fails.
+``--json FILE`` also writes them for ``python -m benchmarks.report``.
 """
 
 import argparse
+import json
 import statistics
 import sys
 import time
@@ -20,8 +22,10 @@ import time
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
-from planning import MotionPlanner, PickPlaceOptions, PlanningScene
+from planning import MotionPlanner, PickPlaceOptions, PlanningScene, planner_kernels
 
 R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # the hand's z axis along -z_W
 STEPS = ("move_above_object", "approach", "lift", "move_to_place above", "move_to_place down")
@@ -59,11 +63,45 @@ def plan_sequence(scene: PlanningScene) -> dict[str, float]:
     return times
 
 
+def figures(rows: list[dict[str, float]]) -> dict:
+    """The repeats' step times (s) as ``--json`` figures: per step and in total, the median,
+    min and max in ms."""
+
+    def stats(label, seconds):
+        ms = [1e3 * s for s in seconds]
+        median = statistics.median(ms)
+        return {"step": label, "median_ms": median, "min_ms": min(ms), "max_ms": max(ms)}
+
+    table = [stats(name, [r[name] for r in rows]) for name in STEPS]
+    table.append(stats("total", [sum(r.values()) for r in rows]))
+    columns = [
+        ["step", "step", "", ""],
+        ["median_ms", "median", "ms", ".1f"],
+        ["min_ms", "min", "ms", ".1f"],
+        ["max_ms", "max", "ms", ".1f"],
+    ]
+    return {
+        "settings": {"repeats": len(rows)},
+        "figures": {"total_ms": table[-1]["median_ms"]},
+        "tables": [
+            {
+                "title": f"Planning time per step, {len(rows)} repeats (the first in the process "
+                "included)",
+                "columns": columns,
+                "rows": table,
+            }
+        ],
+    }
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default=str(config_dir() / "pickplace.yaml"))
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args(argv)
+    # Measure the compiled planner: on a fresh install, wait for its kernels' build.
+    planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("benchmark"))
     rows = []
     for _ in range(args.repeats):
         scene = PlanningScene()
@@ -80,6 +118,8 @@ def main(argv=None) -> int:
         f"{'total':20s} {statistics.median(totals) * 1e3:7.1f} ms median of {len(rows)} "
         f"(min {min(totals) * 1e3:.1f}, max {max(totals) * 1e3:.1f})"
     )
+    if args.json:
+        write_atomic(args.json, json.dumps(figures(rows), indent=1) + "\n", "figures")
     return 0
 
 

@@ -1,7 +1,7 @@
 """Two checkouts of this project side by side on the MotionBenchMaker problems, interleaved.
 
     python benchmarks/planner_ab.py OLD_CHECKOUT NEW_CHECKOUT [--limit 1000] [--families F ...]
-        [--timeout 5] [--set section.field=value ...]
+        [--timeout 5] [--set section.field=value ...] [--dataset PATH]
 
 Each checkout runs in a worker process of its own (its own ``planning`` package and numba cache:
 compile each once first, e.g. with ``python -m planning.benchmark --limit 1`` in it). The driver
@@ -9,7 +9,10 @@ hands every problem to one worker, then to the other, alternating which goes fir
 one of them works at a time: both see the same machine, whatever its speed is doing, and the
 other core stays idle. Each worker times ``MotionPlanner.plan_path`` as ``python -m
 planning.benchmark`` does (scene loaded and ``prepare``d untimed). ``--set`` changes an option
-of NEW's planner (``shortcut.iterations=40``), to compare options on one checkout.
+of NEW's planner (``shortcut.iterations=40``), to compare options on one checkout. Both sides
+plan the same problem files: the driver finds them once, as ``python -m planning.benchmark`` does
+(``--dataset``, else ``$DRAKE_SIM_MBM``, the cache, or a download with pip into the cache; see
+``planning.io.mbm.find_problems``), and hands the folder to both workers.
 
 Prints both sides' median, p95 and mean (ms), their median path lengths, the median over the
 problems of NEW's time over OLD's, the ratio of the total times, the share of problems with the
@@ -40,13 +43,14 @@ READY = "ready"
 
 
 # -------------------------------------------------------------------------- worker ----
-def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
+def worker(checkout: Path, timeout: float, settings: list[str], folder: Path) -> None:
     """Reads problem indices on stdin and answers each with a JSON line: [index, time (s) or
     None when the problem is invalid, path length (rad) or None when it failed, family]. Each
-    problem is ``planning.benchmark.run_problem``'s, timed as that benchmark times it."""
+    problem, of the MBM problems folder ``folder``, is ``planning.benchmark.run_problem``'s,
+    timed as that benchmark times it."""
     sys.path.insert(0, str(checkout))
     import planning
-    from planning.benchmark import problems_folder, run_problem
+    from planning.benchmark import run_problem
     from planning.io import mbm
     from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 
@@ -59,7 +63,7 @@ def worker(checkout: Path, timeout: float, settings: list[str]) -> None:
         return
     scene = planning.PlanningScene()
     planner = MotionPlanner(scene, options)
-    problems = list(mbm.iter_problems(problems_folder(mbm.default_dataset()), None, 100_000))
+    problems = list(mbm.iter_problems(folder, None, 100_000))
     print(json.dumps([READY, [[p.family, p.number] for p in problems]]), flush=True)
     for line in sys.stdin:
         problem = problems[int(line)]
@@ -99,8 +103,9 @@ def with_settings(options, settings: list[str]):
 class _Side:
     """A worker process for one checkout."""
 
-    def __init__(self, checkout: Path, timeout: float, settings: list[str]):
+    def __init__(self, checkout: Path, timeout: float, settings: list[str], folder: Path):
         command = [sys.executable, __file__, "--worker", str(checkout), "--timeout", str(timeout)]
+        command += ["--dataset", str(folder)]
         command += [f"--set={s}" for s in settings]
         self.process = subprocess.Popen(
             command,
@@ -174,31 +179,44 @@ def _main(argv) -> int:
     parser.add_argument("--families", nargs="+", help="only these families")
     parser.add_argument("--timeout", type=float, default=5.0, help="s per request")
     parser.add_argument("--set", action="append", default=[], help="NEW's option: a.b=value")
+    parser.add_argument(
+        "--dataset",
+        type=cli.input_path("dataset"),
+        metavar="PATH",
+        help="MBM problems folder or problems.tar.bz2 (default: as planning.benchmark finds it)",
+    )
     parser.add_argument("--worker", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker is not None:
-        worker(args.worker, args.timeout, args.set)
+        worker(args.worker, args.timeout, args.set, args.dataset)
         return 0
     if args.old is None or args.new is None:
         parser.error("give two checkouts, OLD and NEW")
+    # The workers (and their own planners' builds) use the compiled planner from the first
+    # problem, waiting for it on a fresh install.
+    os.environ["DRAKE_SIM_KERNELS"] = "wait"
     for checkout in (args.old, args.new):
         if not (checkout / "planning" / "__init__.py").is_file():
             parser.error(f"{checkout} is not a checkout of this project (no planning/)")
     for setting in args.set:
         if "=" not in setting or setting.split("=")[0].count(".") != 1:
             parser.error(f"--set {setting}: expected section.field=value")
+    from planning.io import mbm  # here, not above: a worker imports its own checkout's
+
+    folder = mbm.find_problems(args.dataset).resolve()  # MbmDataError: one line, exit code 2
     try:
-        print(compare(args))
+        print(compare(args, folder))
     except RuntimeError as e:  # a worker failed, or one side alone failed a problem
         raise ConfigError(str(e)) from e
     return 0
 
 
-def compare(args) -> str:
-    """Runs both sides on the chosen problems; returns ``summarize``'s report. Raises
-    RuntimeError when a worker fails, or when one side fails a problem the other solves."""
-    old = _Side(args.old, args.timeout, [])
-    new = _Side(args.new, args.timeout, args.set)
+def compare(args, folder: Path) -> str:
+    """Runs both sides on the chosen problems of the MBM problems folder ``folder``; returns
+    ``summarize``'s report. Raises RuntimeError when a worker fails, or when one side fails a
+    problem the other solves."""
+    old = _Side(args.old, args.timeout, [], folder)
+    new = _Side(args.new, args.timeout, args.set, folder)
     seen: dict[str, int] = {}
     indices = []
     for k, (family, _) in enumerate(old.problems):

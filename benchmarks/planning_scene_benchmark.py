@@ -5,9 +5,11 @@ Prints collision checks per second (empty scene with the table, and an MBM books
 edge checks per second, IK solve times and success rates (full pose, position only, orientation
 only), add and remove times at several scene sizes, and per MBM family how many problems have a
 collision-free start and goal under our model with the fingers at the request's own positions
-(and, for comparison, clamped to the URDF's 0.04 m limit). The MBM problems are the repository's
-own copy (``benchmarks/data/mbm_panda``) unless ``--dataset`` names a ``problems`` folder, a
-folder holding ``problems.tar.bz2`` or the archive itself.
+(and, for comparison, clamped to the URDF's 0.04 m limit). The MBM problems come from
+``--dataset`` (a ``problems`` folder, a folder holding ``problems.tar.bz2`` or the archive itself),
+else as ``python -m planning.benchmark`` finds them (``planning.io.mbm.find_problems``:
+``$DRAKE_SIM_MBM``, the cache, or a download with pip into the cache); the MBM part is skipped,
+saying why, when they cannot be had.
 """
 
 import argparse
@@ -20,7 +22,6 @@ from pydrake.math import RigidTransform
 from tqdm import tqdm
 
 import planning
-from planning.benchmark import problems_folder
 from planning.io import mbm
 
 
@@ -141,7 +142,10 @@ def bench_mbm(scene, folder: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
-        "--dataset", type=Path, default=None, help="default: benchmarks/data/mbm_panda"
+        "--dataset",
+        type=Path,
+        default=None,
+        help="MBM problems folder or problems.tar.bz2 (default: as planning.benchmark finds it)",
     )
     parser.add_argument("--samples", type=int, default=20000, help="collision checks to time")
     parser.add_argument("--ik-poses", type=int, default=100)
@@ -159,15 +163,15 @@ def main() -> None:
     bench_checks(scene, args.samples, rng, "table only")
     bench_ik(scene, args.ik_poses, rng)
     bench_add_remove(scene)
-    dataset = args.dataset or mbm.default_dataset()
-    if dataset.exists():
-        folder = problems_folder(dataset)
+    try:
+        folder = mbm.find_problems(args.dataset)
+    except mbm.MbmDataError as e:
+        print(f"MBM problems skipped: {e}")
+    else:
         problem = next(mbm.iter_problems(folder, families=["bookshelf_thin_panda"], limit=1))
         scene.load_moveit(problem.scene_file)
         bench_checks(scene, args.samples, rng, "MBM bookshelf_thin scene 1")
         bench_mbm(scene, folder)
-    else:
-        print(f"MBM dataset not found at {dataset}: skipped")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Cost of adding objects to a planning scene as it grows (issue #14).
+"""Cost of adding objects to a planning scene as it grows.
 
 Run from the checkout: ``python benchmarks/scene_scale_benchmark.py [--sizes 10 100 400]``.
 For each size N, on a fresh scene (the table alone), prints:
@@ -13,10 +13,12 @@ For each size N, on a fresh scene (the table alone), prints:
   ``AddCollisionShapeToBody`` at N objects (what ``add_box`` used to do for each object; it
   re-applies every collision filter, so its cost grows with the square of N).
 
-The acceptance of issue #14 is the ``add`` median at 400 objects within 2x of the one at 10.
+The acceptance is the ``add`` median at 400 objects within 2x of the one at 10. ``--json FILE``
+also writes the figures for ``python -m benchmarks.report``.
 """
 
 import argparse
+import json
 import statistics
 import time
 
@@ -25,6 +27,8 @@ from pydrake.math import RigidTransform
 from pydrake.planning import SceneGraphCollisionChecker
 
 import planning
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 
 _WINDOW = 10  # adds measured per size
 
@@ -78,10 +82,40 @@ def measure(size: int) -> dict[str, float]:
     }
 
 
+def figures(results: dict[int, dict[str, float]]) -> dict:
+    """The measurements (s) as ``--json`` figures: a table in ms by scene size, and the ratio of
+    the ``add`` median at the largest size over the smallest."""
+    keys = {"add": "add_ms", "first query": "first_query_ms", "add + query": "add_query_ms"}
+    keys["Drake add"] = "drake_add_ms"
+    rows = [
+        {"objects": size, **{keys[k]: 1e3 * v for k, v in r.items()}} for size, r in results.items()
+    ]
+    smallest, largest = min(results), max(results)
+    ratio = results[largest]["add"] / results[smallest]["add"]
+    columns = [
+        ["objects", "objects", "", "d"],
+        ["add_ms", f"add, median of {_WINDOW}", "ms", ".3f"],
+        ["first_query_ms", "first query after the adds", "ms", ".1f"],
+        ["add_query_ms", f"add + query, median of {_WINDOW}", "ms", ".2f"],
+        ["drake_add_ms", "Drake's AddCollisionShapeToBody, median of 5", "ms", ".2f"],
+    ]
+    note = (
+        f"The add median at {largest} objects is {ratio:.2f}x the one at {smallest} "
+        "(acceptance: within 2x)."
+    )
+    return {
+        "settings": {"sizes": list(results)},
+        "figures": {"add_ratio": ratio},
+        "tables": [{"title": "By scene size", "columns": columns, "rows": rows, "note": note}],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 400])
-    sizes = parser.parse_args().sizes
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
+    args = parser.parse_args()
+    sizes = args.sizes
     results = {}
     print(f"{'objects':>8} {'add':>10} {'first query':>12} {'add + query':>12} {'Drake add':>10}")
     for size in sizes:
@@ -93,6 +127,8 @@ def main() -> None:
     smallest, largest = min(sizes), max(sizes)
     ratio = results[largest]["add"] / results[smallest]["add"]
     print(f"add at {largest} objects / add at {smallest}: {ratio:.2f}x (acceptance: within 2x)")
+    if args.json:
+        write_atomic(args.json, json.dumps(figures(results), indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -11,10 +11,12 @@ drifts by 2 % in distance and 0.5 degrees per metre. Printed per arena:
 * the pose RMSE and final error of SLAM and of the odometry, m; the map's ``map_iou`` and
   ``known_fraction`` against the arena's grid at 0.05 m.
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the table for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
+import json
 import math
 import os
 import platform
@@ -24,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid, known_fraction, occupancy_iou
 from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, compose, relative
 from drake_sim.worlds.arena import arena_grid, load_arena, shipped_arenas
@@ -123,10 +127,41 @@ def run_arena(path: Path, seed: int) -> dict:
     }
 
 
+COLUMNS = (
+    ("arena", "arena", "", ""),
+    ("scans", "scans", "", "d"),
+    ("update_ms", "update, median", "ms", ".2f"),
+    ("p95_ms", "update, p95", "ms", ".2f"),
+    ("insert_ms", "insert_scan, median", "ms", ".3f"),
+    ("rmse_m", "pose RMSE", "m", ".4f"),
+    ("final_m", "final pose error", "m", ".4f"),
+    ("odom_final_m", "odometry's final error", "m", ".3f"),
+    ("map_iou", "map IoU", "", ".4f"),
+    ("known", "known fraction", "", ".4f"),
+)
+"""(key, header, unit, format) of the ``--json`` table's columns."""
+
+
+def figures(rows: list[dict], seed: int) -> dict:
+    """The per-arena rows as ``--json`` figures."""
+    return {
+        "settings": {"seed": seed},
+        "figures": {f"{r['arena']}_{k}": r[k] for r in rows for k in ("update_ms", "rmse_m")},
+        "tables": [
+            {
+                "title": f"Per arena, its default route (seed {seed})",
+                "columns": [list(c) for c in COLUMNS],
+                "rows": rows,
+            }
+        ],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--arena", type=Path, action="append", help="default: all shipped")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
@@ -135,12 +170,16 @@ def main() -> None:
     header = ("arena", "scans", "update_ms", "p95_ms", "insert_ms", "rmse_m", "final_m")
     header += ("odom_final_m", "map_iou", "known")
     print(" ".join(f"{h:>12}" for h in header))
+    rows = []
     for path in args.arena or shipped_arenas():
         row = run_arena(path, args.seed)
+        rows.append({"arena": path.stem, **row})
         cells = [f"{path.stem:>12}"] + [
             f"{row[h]:>12d}" if isinstance(row[h], int) else f"{row[h]:>12.4f}" for h in header[1:]
         ]
         print(" ".join(cells), flush=True)
+    if args.json:
+        write_atomic(args.json, json.dumps(figures(rows, args.seed), indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -13,11 +13,13 @@ For each controller (PID and LQR, side by side), on the default robot and scenar
 * a manoeuvre (``MANOEUVRE``: drive, turn while driving, reverse, stop): the largest lean
   after the first second, and how far the robot lags its distance reference (RMS and max).
 
-Not a test: speeds depend on the machine.
+``--json FILE`` also writes the figures for ``python -m benchmarks.report``. Not a test: speeds
+depend on the machine.
 """
 
 import argparse
 import dataclasses as dc
+import json
 import os
 import platform
 import statistics
@@ -28,6 +30,8 @@ from pydrake.systems.analysis import Simulator
 
 from diagrams.walle_balance import make_walle_diagram, run_walle, walle_track
 from diagrams.walle_balance_scenario import Push, WalleBalanceScenario, load_walle_balance_scenario
+from drake_sim.base.cli import output_file
+from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
 from drake_sim.robots.walle import default_robot_file
 from drake_sim.robots.walle_params import WalleParams, load_walle_params
@@ -105,6 +109,30 @@ def manoeuvre(scenario, robot) -> dict:
     }
 
 
+def figures(rows: dict[str, dict[str, float]], settings: dict) -> dict:
+    """The controllers' figures as ``--json`` figures: one row per figure ("max drift (m)"
+    gives the figure "max drift" in m), one column per controller."""
+    table = []
+    for key in next(iter(rows.values())):
+        name, _, unit = key.partition(" (")
+        row = {"figure": name, "unit": unit.rstrip(")") or "x"}
+        table.append(row | {controller: values[key] for controller, values in rows.items()})
+    columns = [["figure", "figure", "", ""], ["unit", "unit", "", ""]]
+    columns += [[controller, controller.upper(), "", ".3f"] for controller in rows]
+    note = (
+        f"Pushes at the body's top for {settings['push_duration_s']:g} s, found by bisection to "
+        f"{2.0 / 2 ** settings['steps']:.3f} m g; balance: {settings['duration_s']:g} s with IMU "
+        f"noise, seeds 0 to {settings['runs'] - 1} (largest lean and drift after the first "
+        "second; the real-time factor is their median)."
+    )
+    factors = {f"real_time_factor_{c}": v["real-time factor"] for c, v in rows.items()}
+    return {
+        "settings": settings,
+        "figures": factors,
+        "tables": [{"title": "Per controller", "columns": columns, "rows": table, "note": note}],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--duration", type=float, default=20.0, help="simulated s of balance")
@@ -112,6 +140,7 @@ def main() -> None:
     parser.add_argument("--push-duration", type=float, default=0.2, help="s")
     parser.add_argument("--settle", type=float, default=4.0, help="s after the push")
     parser.add_argument("--steps", type=int, default=8, help="bisection steps")
+    parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
     base = load_walle_balance_scenario(config_dir() / "walle_balance.yaml")
     robot = load_walle_params(default_robot_file())
@@ -150,6 +179,10 @@ def main() -> None:
         f"(balance: {args.duration:g} s x {args.runs} seeds with IMU noise, after the first "
         f"second; push resolution {2.0 / 2**args.steps:.3f} m g)"
     )
+    if args.json:
+        settings = {"duration_s": args.duration, "runs": args.runs, "steps": args.steps}
+        settings |= {"push_duration_s": args.push_duration, "settle_s": args.settle}
+        write_atomic(args.json, json.dumps(figures(rows, settings), indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

@@ -113,7 +113,7 @@ def load_pickplace_scenario(
         scenario.scene = load_typed(SceneFile, filename=scene_path)
     for item in overrides:
         key = item.partition("=")[0]
-        if key in _FILLED or any(key.startswith(k + ".") for k in _FILLED):
+        if key in _FILLED or any(key.startswith((k + ".", k + "[")) for k in _FILLED):
             raise ConfigError(f"--set {item!r}: {key} is set by {_filled_by(key)}")
     scenario = apply_overrides(PickPlaceScenario, scenario, overrides)
     check_scenario(scenario, str(path))
@@ -165,6 +165,6 @@ def _refuse_filled_keys(tree, where: str) -> None:
 
 def _filled_by(key: str) -> str:
     for filled, place in _FILLED.items():
-        if key == filled or key.startswith(filled + "."):
+        if key == filled or key.startswith((filled + ".", filled + "[")):
             return place
     return "the scenario"

@@ -4,7 +4,7 @@ With a viewer (the default) it runs in real time in Meshcat, drawing the robot, 
 trail and its true trail, until Ctrl-C (or SIGTERM) or ``--duration``; a stop still prints the
 summary and writes the report. ``--headless`` runs flat out for 20 s (or ``--duration``).
 ``--teleop`` turns the flip controller off: drive with the W/A/S/D keys and Space to stop, in
-the Meshcat page. ``--report`` writes the JSON report (README, Reports).
+the Meshcat page. ``--report`` writes the JSON report (docs/flip.md, The report).
 Exit codes: 0 for a completed run, 1 if the simulation failed, 2 for bad input.
 """
 
@@ -98,17 +98,17 @@ def main(argv=None) -> int:
         realtime=viewer,
         controller="teleop" if args.teleop else "flip",
     )
-    failure = None
+    failure, end = None, "duration"
     try:
         if meshcat is not None:
             _set_up_viewer(meshcat, scenario, teleop=args.teleop, record=bool(args.record))
-        if viewer:
-            cli.announce(meshcat, "running")
+        cli.announce(meshcat if viewer else None, "running")
         # A bar on long headless runs, on a terminal only (tqdm stays silent in logs).
         run.advance_to(duration, progress=args.headless and duration >= PROGRESS_MIN_DURATION)
     except BaseException as e:
         # A user stop is summarised like a finished run; a simulation error is reported.
-        failure = cli.run_ending(e)[1] or None
+        end, message = cli.run_ending(e)
+        failure = message or None
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
@@ -122,7 +122,8 @@ def main(argv=None) -> int:
     )
     print(summary)
     if args.report:
-        cli.write_text(args.report, json.dumps(report.to_dict(), indent=2) + "\n", "report")
+        data = {"end": end, **report.to_dict()}  # end: duration, stopped or failed
+        cli.write_text(args.report, json.dumps(data, indent=2) + "\n", "report")
     if failure is not None:
         print(
             f"error: simulation failed at t = {report.sim_time_s:.3f} s: {failure}", file=sys.stderr

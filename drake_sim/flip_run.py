@@ -19,7 +19,7 @@ from drake_sim.systems.control.flip_controller import STATUS_FIELDS, FlipMode
 
 @dc.dataclass(kw_only=True)
 class FlipReport(RunReport):
-    """What a run did. Distances in m, times in s. The keys are the README's (Reports)."""
+    """What a run did. Distances in m, times in s. The keys are docs/flip.md's (The report)."""
 
     flips: int  # Completed half-turns over the axle.
     failed_flips: int  # Attempts that fell back or timed out (each then recovered or not).

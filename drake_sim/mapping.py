@@ -5,7 +5,9 @@ It drives a route (``--route FILE``, else the arena's default route in ``config/
 with ``--teleop``, the W/A/S/D keys in the Meshcat page, while the SLAM builds the map from the
 lidar's scans and the wheel odometry. Meshcat shows the robot (the truth), the scan, the map as
 it grows and the SLAM pose's trail against the true one. At the end the map is written as
-``--out``'s ``.pgm`` and ``.yaml`` (map_saver's format) and scored against the arena. Exit
+``--out``'s ``.pgm`` and ``.yaml`` (map_saver's format) and scored against the arena; a run that
+ends before its route does (Ctrl-C, SIGTERM, ``--duration``, a failure) keeps any map already at
+``--out`` and writes ``NAME.partial.pgm`` / ``.yaml`` beside it instead. Exit
 codes: 0 for a completed run, 1 if the route was not completed (or the simulation failed),
 2 for bad input.
 """
@@ -108,6 +110,18 @@ def _route_file(scenario: MappingScenario, arena_file):
     return route
 
 
+def _save_map(run: MappingRun, out: Path, *, complete: bool):
+    """Saves the run's map at ``out`` when the run is ``complete`` (the route driven to its end,
+    or a teleop run, which Ctrl-C ends), else beside it as ``NAME.partial``: a run stopped or
+    failed early never replaces a map that was there. Returns the files written."""
+    if complete:
+        return run.save_map(out)
+    files = run.save_map(out.with_name(f"{out.name}.partial"))
+    kept = f"; {out}.yaml is kept as it was" if Path(f"{out}.yaml").exists() else ""
+    print(f"the run ended early ({run.end}): its partial map is {files[1]}{kept}")
+    return files
+
+
 def main(argv=None) -> int:
     args = _parse_args(argv)
     scenario = load_scenario(args)
@@ -141,13 +155,16 @@ def main(argv=None) -> int:
                 meshcat.StartRecording()
         if args.teleop:
             print(f"teleop: in the Meshcat page, {', '.join(b[0] for b in BUTTONS)}")
-        if viewer:
-            cli.announce(meshcat, "mapping")
+        cli.announce(meshcat if viewer else None, "mapping")
         run.run(duration)
+    except BaseException as e:  # a stop between the set-up and the run's own loop
+        if not cli.is_stop(e):
+            raise
+        run.end = "stopped"
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
-    files = run.save_map(out)
+    files = _save_map(run, out, complete=run.end == "route_done" or args.teleop)
     report = run.report()
     print(
         f"{arena_file.name}: ended by {report.end}, {report.scans} scans, map IoU "

@@ -154,9 +154,12 @@ def main(argv=None) -> int:
         if _interactive(args):
             _drive_from_the_page(run, meshcat, occupancy_map, start, args.duration)
         else:
-            if viewer:
-                cli.announce(meshcat, "navigating")
+            cli.announce(meshcat if viewer else None, "navigating")
             run.run(duration)
+    except BaseException as e:  # a stop between the set-up and the run's own loop
+        if not cli.is_stop(e):
+            raise
+        run.end = "stopped"
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
@@ -179,7 +182,7 @@ def main(argv=None) -> int:
     )
     if args.report:
         cli.write_text(args.report, json.dumps(report.to_dict(), indent=2) + "\n", "report")
-    if report.reached_all:
+    if report.reached_all or report.end == "stopped":  # Ctrl-C or SIGTERM: a normal stop
         return cli.EXIT_OK
     print(f"error: {_why(run, report, goals)}", file=sys.stderr)
     return cli.EXIT_FAILED

@@ -2,7 +2,8 @@
 
 With a viewer (the default) the station runs in real time in Meshcat: open the page, press
 "Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. Ctrl-C or SIGTERM stop a run at
-any point, with a summary line (``stopped: ...`` before the task's end, and no report then).
+any point, with a summary line (``stopped: ...`` before the task's end; its report says
+``"end": "stopped"``).
 ``--headless`` runs the task at once, flat out. ``--mode physics`` (default) simulates contact
 and grasps the object by friction; ``--mode kinematic`` plays the planned motions back (Franka's
 fake hardware). Everything else comes from one scenario (``--scenario FILE``, default
@@ -32,7 +33,7 @@ from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.errors import ErrorCode, PlanningError
-from planning.task.pick_place import STEPS, PickPlaceTask, StepReport
+from planning.task.pick_place import STEPS, PickPlaceTask, StepReport, TaskReport
 
 BUTTON = "Pick"
 
@@ -116,8 +117,8 @@ def _run_task(mpi, meshcat, scenario, args):
     """Waits for the Pick button (with a viewer, unless ``--no-wait``) and runs the task.
 
     Returns:
-        The task's report, or None when Ctrl-C or SIGTERM stopped it (a summary line says
-        how far it got).
+        (the task's report, whether Ctrl-C or SIGTERM stopped it): a stopped task's report holds
+        the steps done (a summary line says how far it got).
     """
     steps = []
 
@@ -132,15 +133,18 @@ def _run_task(mpi, meshcat, scenario, args):
                 cli.announce(meshcat, "running the task")
             else:
                 _wait_for_button(mpi, meshcat)
-        return PickPlaceTask(mpi, scenario.task, on_step=on_step).run()
+        return PickPlaceTask(mpi, scenario.task, on_step=on_step).run(), False
     except BaseException as e:  # a stop may surface as another error: see cli.is_stop
         if not cli.is_stop(e):
             raise
+        wall = time.perf_counter() - wall_start
         print(
             f"stopped: {len(steps)} of {len(STEPS)} steps done, {mpi.time:.1f} s simulated "
-            f"in {time.perf_counter() - wall_start:.1f} s"
+            f"in {wall:.1f} s"
         )
-        return None
+        report = TaskReport(reason="stopped by the user", steps=steps, sim_time_s=mpi.time)
+        report.wall_time_s = wall
+        return report, True
 
 
 def main(argv=None) -> int:
@@ -152,33 +156,37 @@ def main(argv=None) -> int:
         return cli.EXIT_OK
     viewer = not args.headless
     meshcat = StartMeshcat() if viewer or args.record else None
+    setup_start = time.perf_counter()
     try:
         mpi = make_planning_station(scenario, meshcat=meshcat, realtime_rate=1.0 if viewer else 0.0)
     except PlanningError as e:
         if e.code is ErrorCode.INVALID_SCENE:
             raise ConfigError(e.message) from None
         raise
+    setup_s = time.perf_counter() - setup_start  # the planner's kernels compiled or loaded
     if meshcat is not None:
         meshcat.SetCameraPose([1.6, -1.2, 0.9], [0.4, 0.0, 0.15])
         if args.record:
             meshcat.StartRecording()
     try:
-        report = _run_task(mpi, meshcat, scenario, args)
+        report, stopped = _run_task(mpi, meshcat, scenario, args)
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
-    if report is None:
+    end = "stopped" if stopped else "done" if report.success else "failed"
+    data = {"end": end, "mode": scenario.mode, "setup_time_s": setup_s, **report.to_dict()}
+    if args.report:
+        cli.write_text(args.report, json.dumps(data, indent=2) + "\n", "report")
+    if stopped:
         return cli.EXIT_OK  # a user stop
-    data = {"mode": scenario.mode, **report.to_dict()}
     error = "n/a" if report.place_error_m is None else f"{report.place_error_m:.4f} m"
     print(
         f"{'success' if report.success else 'failure'}: place error {error}, planning "
         f"{report.planning_time_s:.2f} s, {report.sim_time_s:.1f} s simulated in "
-        f"{report.wall_time_s:.1f} s",
+        f"{report.wall_time_s:.1f} s; set-up {setup_s:.1f} s (the planner's kernels "
+        "compiled or loaded)",
         flush=True,
     )
-    if args.report:
-        cli.write_text(args.report, json.dumps(data, indent=2) + "\n", "report")
     code = cli.EXIT_OK
     if not report.success:
         what = "impossible task" if report.impossible else f"step {report.failed_step} failed"

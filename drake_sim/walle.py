@@ -123,9 +123,12 @@ def main(argv=None) -> int:
                 meshcat.StartRecording()
         if args.teleop:
             print(f"teleop: in the Meshcat page, {', '.join(b[0] for b in BUTTONS)}")
-        if viewer:
-            cli.announce(meshcat, "running")
+        cli.announce(meshcat if viewer else None, "running")
         run.run(duration)  # Ends on its own conditions, a user stop, or a failure.
+    except BaseException as e:  # a stop between the set-up and the run's own loop
+        if not cli.is_stop(e):
+            raise
+        run.end = "stopped"
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)

@@ -34,7 +34,7 @@ fell, the follower gave up searching for the line, a user stop, or a simulation 
 
 @dc.dataclass(kw_only=True)
 class WalleReport(RunReport):
-    """What a run did. Distances in m, times in s, angles in degrees (README, Wall-E)."""
+    """What a run did. Distances in m, times in s, angles in degrees (docs/walle.md)."""
 
     fell: bool  # The lean passed the balance controller's fallen pitch.
     time_upright_s: float  # Until the fall, or the whole run.

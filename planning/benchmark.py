@@ -5,10 +5,12 @@ Usage::
     python -m planning.benchmark [--dataset PATH] --limit 5 --timeout 5 --report report.json \\
         [--families box_panda cage_panda] [--compare-ompl] [--plot times.png]
 
-``--dataset`` is a ``problems`` folder, a folder holding ``problems.tar.bz2`` (unpacked once into
-the cache) or the archive itself; by default the repository's own copy,
-``benchmarks/data/mbm_panda`` (``planning.io.mbm.default_dataset``; its README.md says where the
-problems come from). For each problem the scene is loaded, the fingers are set to the
+The MotionBenchMaker problems are third-party data, not part of the repository:
+``planning.io.mbm.find_problems`` takes them from ``--dataset`` (a ``problems`` folder, a folder
+holding ``problems.tar.bz2``, or the archive itself, unpacked once into the cache), else from
+``$DRAKE_SIM_MBM`` (the same forms), else from the cache (``<cache>/mbm/panda``), else it
+downloads them once from the package index with pip (the ``vamp-planner`` source distribution,
+about 65 MB) into the cache. For each problem the scene is loaded, the fingers are set to the
 request's positions, and the start and goal are checked (``valid``: in limits and collision-free
 under our model); valid problems are planned with ``MotionPlanner.plan_path`` (the checks and the
 search of ``plan_to_joints``, without the time parametrisation) and timed from request to
@@ -23,7 +25,8 @@ times, checks per request; ``planning._benchmark_profile``) and times ``plan_to_
 parametrisation apart, after the timed interval. A progress bar (tqdm, when installed) runs on
 stderr. Paths are re-checked with Drake's checker alone
 (``planning.collision.checker.CheckerAdapter``), whatever collision model the planner used.
-Exit code 0 when the run completed, 2 on bad input.
+Exit code 0 when the run completed, 2 on bad input or when the problems cannot be had (one line
+on stderr: a path that is no set, a corrupt archive, a download that failed).
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ import numpy as np
 
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.resources import cache_dir
+from planning import planner_kernels
 from planning._benchmark_profile import PhaseProfiler, breakdown
 from planning._ompl_baseline import ompl_available, ompl_plan
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
@@ -51,18 +54,6 @@ from planning.paths import path_length
 from planning.planning_scene import PlanningScene
 
 _FINE = 0.01  # rad
-
-
-def problems_folder(dataset: Path) -> Path:
-    """Returns the unpacked ``problems`` folder of a dataset path (see the module docstring)."""
-    if dataset.is_dir() and (dataset / mbm.FAMILIES[0]).is_dir():
-        return dataset
-    if dataset.is_dir() and (dataset / "problems" / mbm.FAMILIES[0]).is_dir():
-        return dataset / "problems"
-    archive = dataset / "problems.tar.bz2" if dataset.is_dir() else dataset
-    if not archive.is_file():
-        raise FileNotFoundError(f"{dataset}: neither a problems folder nor problems.tar.bz2")
-    return mbm.unpack(archive, cache_dir() / "mbm_panda")
 
 
 def _load(scene, problem):
@@ -196,8 +187,9 @@ def _parse_args(argv):
         "--dataset",
         type=cli.input_path("dataset"),
         default=None,
-        help="problems folder, folder with problems.tar.bz2, or the archive "
-        "(default: the repository's benchmarks/data/mbm_panda)",
+        metavar="PATH",
+        help="MBM problems folder, folder with problems.tar.bz2, or the archive (default: "
+        f"${mbm.ENV_VAR}, else the cache, else downloaded once with pip into the cache)",
     )
     parser.add_argument("--families", nargs="+", choices=mbm.FAMILIES, default=list(mbm.FAMILIES))
     parser.add_argument("--limit", type=cli.positive_int, help="first N problems per family")
@@ -223,10 +215,13 @@ def _parse_args(argv):
     if args.compare_ompl and not ompl_available():
         raise ConfigError("--compare-ompl needs the ompl package (pip install ompl)")
     try:
-        args.dataset = problems_folder(args.dataset or mbm.default_dataset())
+        args.dataset = mbm.find_problems(args.dataset)
         args.options = load_planner_options(args.options) if args.options else None
     except (FileNotFoundError, RuntimeError, ValueError) as e:
         raise ConfigError(str(e).splitlines()[0]) from None
+    missing = [f for f in args.families if not (args.dataset / f).is_dir()]
+    if missing:
+        raise ConfigError(f"{args.dataset}: no MBM family {', '.join(missing)}")
     return args
 
 
@@ -244,6 +239,8 @@ def _main(argv) -> int:
         from ompl import util as ou
 
         ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    # The compiled planner from the first problem: a fresh install waits for its build here.
+    planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planning.benchmark"))
     scene = PlanningScene()
     planner = MotionPlanner(scene, options)
     rows = []

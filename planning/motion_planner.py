@@ -20,11 +20,13 @@ is only partly achievable is returned with ``success=False`` and the fraction ac
 
 import dataclasses as dc
 import functools
+import sys
 import time
 
 import numpy as np
 from pydrake.math import RigidTransform, RotationMatrix
 
+from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter
 from planning.collision.hull_kernel import prove_free_packed
 from planning.collision.sphere_batch import classify_many
@@ -33,7 +35,7 @@ from planning.collision.sphere_kernel import announce_compile
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
 from planning.plan import Plan, PlanResult
-from planning.planner_options import MotionPlannerOptions, load_planner_options
+from planning.planner_options import MotionPlannerOptions, load_planner_options, request_timeout
 from planning.robot_state import RobotState
 from planning.scene_objects import describe_scene
 from planning.search import compiled_rrt
@@ -60,29 +62,79 @@ class MotionPlanner:
         self._options = options if options is not None else MotionPlannerOptions()
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
+        start = time.perf_counter()
+        # Until the compiled search is in numba's cache, plan on Drake's checker while it is
+        # built in the background (``planning.planner_kernels``), then switch to it.
+        self._pending = self._options.spheres.enabled and not self._kernels_now()
         announce_compile(
-            compiled_rrt.solve,
-            compiled_rrt.plan,
-            compiled_rrt.fine_check,
-            classify_many,
-            prove_free_packed,
             toppra.solve,
             cubic.evaluate,
             newton,
             line,
+            note="note: compiling the planner's timing and IK once for this machine (~15 s)...",
+            kernel=False,
         )
         toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
         cubic.warm_up()
-        spheres = self._options.spheres
-        if spheres.enabled:  # covers are made (or read from the cache) here, once
-            sphere_model(scene, spheres.slack)
-            if spheres.refine_slack:
-                sphere_model(scene, spheres.refine_slack)
-        self._search = JointPathSearch(scene, self._options)  # .gcs set by use_gcs()
-        self._search.warm_up()  # the compiled search is compiled or loaded here, once
+        self._search = self._make_search()  # .gcs set by use_gcs()
         lower, upper = self._search.limits  # for _as_arm: the limits, and with their tolerance
         self._limits = (lower, upper, lower - 1e-6, upper + 1e-6)
+        if self._pending:  # IK's steps come from the background build, compiled once
+            planner_kernels.await_shared()
         self._state.ik_solver()  # made now rather than in the first pose request
+        self.setup_time_s = time.perf_counter() - start
+        """s of wall time the planner took to be made: compiling or loading its kernels."""
+
+    def _kernels_now(self) -> bool:
+        """Whether the compiled search can be had now: it is cached (or, in ``wait`` mode, has
+        been built or waited for). Otherwise a background build has been started."""
+        if planner_kernels.mode() == "wait":
+            planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planner"))
+            return True
+        if planner_kernels.ready():
+            return True
+        planner_kernels.start_background()
+        print(
+            "note: the planner's kernels are compiling once for this machine in the background "
+            f"({planner_kernels.describe(planner_kernels.read_status())}); until they are "
+            "ready, plans use Drake's collision checker",
+            file=sys.stderr,
+            flush=True,
+        )
+        return False
+
+    def _make_search(self) -> JointPathSearch:
+        """The joint path search with the options' collision models; on Drake's checker alone
+        while the compiled search is pending (``_pending``)."""
+        options = self._options
+        if self._pending:
+            options = dc.replace(options, spheres=dc.replace(options.spheres, enabled=False))
+        else:
+            announce_compile(
+                compiled_rrt.solve,
+                compiled_rrt.plan,
+                compiled_rrt.fine_check,
+                classify_many,
+                prove_free_packed,
+            )
+            spheres = options.spheres
+            if spheres.enabled:  # covers are made (or read from the cache) here, once
+                sphere_model(self._scene, spheres.slack)
+                if spheres.refine_slack:
+                    sphere_model(self._scene, spheres.refine_slack)
+        search = JointPathSearch(self._scene, options)
+        search.warm_up()  # the compiled search is compiled or loaded here, once
+        return search
+
+    def _switch_when_ready(self) -> None:
+        """At a request's start: switches to the compiled search once its background build has
+        finished (it is then loaded from the cache, ~0.5 s)."""
+        if not self._pending or not planner_kernels.ready():  # ~1 ms: numba's index files
+            return
+        self._pending = False
+        gcs = self._search.gcs
+        self._search = self._make_search()
+        self._search.gcs = gcs
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:
         """Plans through IRIS regions with ``GcsTrajectoryOptimization`` first (opt-in).
@@ -115,6 +167,7 @@ class MotionPlanner:
         update does in MoveIt. The tighter cover (``spheres.refine_slack``) is remade here only
         after held objects or finger positions change (~45 ms); until then requests leave what
         the first cover cannot decide to Drake."""
+        self._switch_when_ready()
         self._search.prepare()
 
     @property
@@ -138,10 +191,13 @@ class MotionPlanner:
 
         Raises:
             PlanningError: INVALID_START, START_IN_COLLISION, INVALID_GOAL, GOAL_IN_COLLISION,
-                PLANNING_FAILED or TIMED_OUT.
+                PLANNING_FAILED or TIMED_OUT; INVALID_MOTION_PLAN for a ``timeout`` that is not
+                a finite number of seconds > 0.
         """
+        budget = request_timeout(timeout, self._options.timeout)
+        self._switch_when_ready()
         t0 = time.perf_counter()
-        deadline = t0 + (timeout or self._options.timeout)
+        deadline = t0 + budget
         path, how = self._find(q_start, q_goal, deadline)
         return self._result(path, how, t0)
 
@@ -173,8 +229,10 @@ class MotionPlanner:
             PlanningError: NO_IK_SOLUTION, GOAL_IN_COLLISION (every IK solution found without
                 collision constraints collides; the bodies are named), or as ``plan_to_joints``.
         """
+        budget = request_timeout(timeout, self._options.timeout)
+        self._switch_when_ready()
         t0 = time.perf_counter()
-        deadline = t0 + (timeout or self._options.timeout)
+        deadline = t0 + budget
         q_start = self._check_start(q_start)
         if X_WE is None and p_WE is None and R_WE is None:
             raise PlanningError(ErrorCode.INVALID_GOAL, "a pose goal needs X_WE, p_WE or R_WE")
@@ -216,6 +274,7 @@ class MotionPlanner:
         Raises:
             PlanningError: INVALID_START, START_IN_COLLISION, INVALID_GOAL, FRAME_NOT_FOUND.
         """
+        self._switch_when_ready()
         t0 = time.perf_counter()
         q_start = self._check_start(q_start)
         if not np.all(np.isfinite(X_WG.GetAsMatrix4())):
@@ -254,7 +313,9 @@ class MotionPlanner:
         """Returns a validated collision-free path (N, 7) between two valid configurations and
         how it was found ("straight", "rrt_connect", ...); for benchmarks and callers that time
         paths themselves."""
-        deadline = time.perf_counter() + (timeout or self._options.timeout)
+        budget = request_timeout(timeout, self._options.timeout)
+        self._switch_when_ready()
+        deadline = time.perf_counter() + budget
         return self._find(q_start, q_goal, deadline)
 
     def _find(self, q_start, q_goal, deadline: float) -> tuple[np.ndarray, str]:

@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drake_sim.base.files import write_atomic
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
 from planning.io.plan_files import FORMAT, VERSION, check_plan_data, invalid, read_plan_json
@@ -249,8 +250,8 @@ class Plan:
         return plan
 
     def save(self, filename: Path | str) -> None:
-        """Writes the plan as JSON (see the module docstring)."""
-        Path(filename).write_text(json.dumps(self.to_dict(), indent=1))
+        """Writes the plan as JSON (see the module docstring), atomically."""
+        write_atomic(filename, json.dumps(self.to_dict(), indent=1), "plan file")
 
     @classmethod
     def load(cls, filename: Path | str) -> Plan:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
+from planning.errors import ErrorCode, PlanningError
 
 NUM_JOINTS = 7  # the Panda's arm joints
 
@@ -32,6 +33,12 @@ def _require(ok: bool, field: str, rule: str, value) -> None:
 
 def _positive(value, field: str) -> None:
     _require(value > 0.0, field, "> 0", value)
+
+
+def _seconds(value) -> bool:
+    """Whether ``value`` is a wall time a request can be given: a finite number > 0 (s)."""
+    number = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    return number and math.isfinite(value) and value > 0.0
 
 
 def _fraction(value, field: str, *, zero_ok: bool) -> None:
@@ -291,12 +298,29 @@ class MotionPlannerOptions:
 
     def check(self) -> None:
         """Raises ValueError naming the first field out of range, sections included."""
-        _positive(self.timeout, "timeout")
+        _require(_seconds(self.timeout), "timeout", "a finite number of seconds > 0", self.timeout)
         _count(self.seed, "seed", least=0)
         for field in dc.fields(self):
             section = getattr(self, field.name)
             if dc.is_dataclass(section):
                 section.check(field.name)
+
+
+def request_timeout(timeout, default) -> float:
+    """The wall time a planning request may take, s: its ``timeout``, or ``default`` (the
+    options' ``timeout``) when that is None. Called at a request's start, before any search.
+
+    Raises:
+        PlanningError: INVALID_MOTION_PLAN (an invalid request) when the value is not a finite
+            number of seconds > 0: NaN, infinite, zero, negative, a bool or a string.
+    """
+    value, name = (default, "options.timeout") if timeout is None else (timeout, "timeout")
+    if not _seconds(value):
+        raise PlanningError(
+            ErrorCode.INVALID_MOTION_PLAN,
+            f"invalid request: {name} must be a finite number of seconds > 0, got {value!r}",
+        )
+    return float(value)
 
 
 def load_planner_options(filename: Path | str) -> MotionPlannerOptions:

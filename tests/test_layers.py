@@ -1,4 +1,4 @@
-"""The layers hold (README, Layout): no module imports one from a layer to its right.
+"""The layers hold (docs/layout.md): no module imports one from a layer to its right.
 
 Every module of ``drake_sim``, ``planning`` and ``diagrams`` is parsed (``ast``, imports inside
 functions included) and given a layer by the longest matching prefix below; an import of a
@@ -41,6 +41,7 @@ LAYERS = (
             "planning.planning_scene",
             "planning.plan",
             "planning.planner_options",
+            "planning.planner_kernels",
             "planning.motion_planner",
         ),
     ),

@@ -9,6 +9,7 @@ code 2 before anything is built or simulated, and Ctrl-C or SIGTERM end the run 
 
 import argparse
 import contextlib
+import logging
 import os
 import signal
 import sys
@@ -17,6 +18,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -39,10 +41,11 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
     """Runs ``main(argv)`` and turns bad input into one stderr line and exit code 2.
 
     ``ConfigError`` (every loader turns bad input into one) is reported as ``error: <message>``
-    on one line; Ctrl-C and SIGTERM (``stop_on_signals``, ``is_stop``) end the run quietly with
-    code 0, after whatever summary ``main`` prints when it catches them. Anything else is a bug
-    and is raised.
+    on one line; Ctrl-C and SIGTERM (``stop_on_signals``, ``is_stop``) end the run with code 0,
+    after whatever summary ``main`` prints when it catches them (a stop ``main`` lets through, in
+    its set-up, gets a line of its own). Anything else is a bug and is raised.
     """
+    logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors: no INFO lines
     try:
         with stop_on_signals():
             try:
@@ -52,6 +55,7 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
             except BaseException as e:  # checked while the handler is in force
                 if not is_stop(e):
                     raise
+                print("stopped before the run began (while it was being set up)", flush=True)
                 return EXIT_OK
     except ConfigError as e:
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)  # one line
@@ -69,7 +73,11 @@ def is_stop(error: BaseException) -> bool:
     """
     while isinstance(error, SystemError) and error.__cause__ is not None:
         error = error.__cause__
-    return isinstance(error, KeyboardInterrupt) or stop_received()
+    handler = signal.getsignal(signal.SIGINT)
+    stopped = isinstance(error, KeyboardInterrupt) or stop_received()
+    if stopped and isinstance(handler, _SignalStop):
+        handler.noticed.set()  # the run handles its stop: no watchdog ending
+    return stopped
 
 
 def run_ending(error: BaseException) -> tuple[str, str]:
@@ -103,16 +111,43 @@ def exit_at_once(code: int) -> None:
     os._exit(code)
 
 
+STOP_GRACE_S = 1.5
+"""s a stopped run has to notice its stop (``is_stop``) before the process ends anyway."""
+
+
 class _SignalStop:
     """The handler ``stop_on_signals`` installs: raises ``KeyboardInterrupt`` and remembers
-    the signal, so that ``is_stop`` knows an error raised after it is the stop's doing."""
+    the signal, so that ``is_stop`` knows an error raised after it is the stop's doing.
+
+    Compiled code may swallow that interrupt (numba's compiler in a long call into LLVM,
+    a C++ library that catches everything): a watchdog thread then ends the process with code 0
+    ``STOP_GRACE_S`` after the signal unless the run has noticed the stop by then (``is_stop``
+    was asked). A second signal ends the process at once, with code 0: the user insists.
+    """
 
     def __init__(self):
         self.received: int | None = None
+        self.noticed = threading.Event()
 
     def __call__(self, signum, frame):
+        if self.received is not None:
+            _end_now(f"stopped ({signal.Signals(signum).name} again)")
         self.received = signum
+        watchdog = threading.Thread(target=self._watch, name="stop-watchdog", daemon=True)
+        watchdog.start()
         raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    def _watch(self) -> None:
+        if not self.noticed.wait(STOP_GRACE_S):
+            _end_now("stopped")
+
+
+def _end_now(line: str) -> None:
+    """Ends the process with code 0 now, after one line on stdout (files being written are
+    left as they were: every output is written atomically)."""
+    with contextlib.suppress(OSError, ValueError):
+        print(line, flush=True)
+    exit_at_once(EXIT_OK)
 
 
 @contextlib.contextmanager
@@ -131,8 +166,9 @@ def stop_on_signals(signals: Sequence[int] = STOP_SIGNALS) -> Iterator[None]:
     try:
         yield
     finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
+        handler.noticed.set()  # the block is over: whatever stop came has been handled
+        for s, old in previous.items():
+            signal.signal(s, old if old is not None else signal.SIG_DFL)
 
 
 def positive_float(text: str) -> float:
@@ -254,16 +290,13 @@ def _check_writable_parent(folder: Path, what: str, text: str) -> None:
 
 
 def write_text(path: Path, text: str, what: str = "file") -> None:
-    """Writes ``text`` to ``path``, making its folder.
+    """Writes ``text`` to ``path`` atomically (``files.write_atomic``), making its folder: a stop
+    or an error leaves the file that was there, never half of the new one.
 
     Raises:
         ConfigError: the file cannot be written (one line naming it and why).
     """
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
-    except OSError as e:
-        raise ConfigError(f"{what} cannot be written: {path} ({e.strerror})") from None
+    write_atomic(path, text, what)
 
 
 def add_robot_and_config_options(
@@ -280,8 +313,10 @@ def add_robot_and_config_options(
 
 
 def announce(meshcat, doing: str) -> None:
-    """Prints, at once, that the run is ``doing`` at Meshcat's URL and that Ctrl-C stops it."""
-    print(f"{doing} at {meshcat.web_url()} (Ctrl-C stops)", flush=True)
+    """Prints, at once, that the run is ``doing`` at Meshcat's URL (headless when ``meshcat``
+    is None) and that Ctrl-C stops it."""
+    where = "headless" if meshcat is None else f"at {meshcat.web_url()}"
+    print(f"{doing} {where} (Ctrl-C stops)", flush=True)
 
 
 def write_replay(meshcat, path: Path, *, recording: bool = True) -> None:

@@ -5,7 +5,9 @@ the value with Drake's ``yaml_load_typed`` on top of ``defaults`` (a missing key
 default). A missing or unreadable file, bytes that are not UTF-8, malformed YAML, an unknown
 key, a value of the wrong type and a non-finite number all raise ``ConfigError`` naming the
 file and the dotted key path (``robot.model.ee_frame``). Range checks stay with each schema.
-``apply_overrides`` applies ``--set key=value`` overrides the same way.
+``apply_overrides`` applies ``--set key=value`` overrides the same way; their keys, like the
+parameter paths of sweep files, are dotted names with list indices (``scene.object.position[0]``,
+``pushes[1].force[2]``), read by ``parse_key_path``.
 
 Schemas are dataclasses (or Drake's own config structs) whose field types are read at run time,
 so a schema module must not use ``from __future__ import annotations``.
@@ -13,6 +15,7 @@ so a schema module must not use ``from __future__ import annotations``.
 
 import dataclasses as dc
 import math
+import re
 import types
 import typing
 from pathlib import Path
@@ -23,6 +26,9 @@ from pydrake.common.yaml import yaml_load_typed
 from drake_sim.base.errors import ConfigError
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+_SEGMENT = re.compile(r"([^\[\]=]+)((?:\[[^\[\]]*\])*)")  # a name and its [i][j]...
+_INDEX = re.compile(r"\[([^\[\]]*)\]")
 
 
 def read_text(filename: Path | str, what: str = "file") -> str:
@@ -103,19 +109,134 @@ def load_checked(schema, filename, check, *, what: str = "file", defaults=None):
     return check(value, where)
 
 
+def parse_key_path(key: str, where: str = "key") -> tuple[str | int, ...]:
+    """The steps of a dotted key with list indices: ``a.b[2].c`` is ``("a", "b", 2, "c")``,
+    ``m[1][0]`` is ``("m", 1, 0)``. The one reader of ``--set`` keys and sweep parameter paths.
+
+    Raises:
+        ConfigError: "``where``: malformed key ..." for an empty name, an index that is not a
+            whole number (a negative one included), or brackets that do not pair up.
+    """
+    steps = []
+    for segment in key.split("."):
+        match = _SEGMENT.fullmatch(segment.strip())
+        if not segment.strip():
+            why = "an empty name"
+        elif segment.strip().startswith("["):
+            why = f"no name before '{segment.strip()}'"
+        elif "=" in segment:
+            why = f"'=' in '{segment.strip()}'"
+        elif match is None:
+            why = f"brackets out of place in '{segment.strip()}'"
+        else:
+            why = None
+        if why is not None:
+            raise ConfigError(f"{where}: malformed key '{key}': {why} (expected a.b[2].c)")
+        steps.append(match.group(1).strip())
+        for text in _INDEX.findall(match.group(2)):
+            text = text.strip()
+            if re.fullmatch(r"-\d+", text):
+                why = f"negative index [{text}] (items count from 0)"
+            elif not (text.isascii() and text.isdigit()):
+                why = f"index [{text}] is not a whole number (expected a.b[2].c)"
+            if why is not None:
+                raise ConfigError(f"{where}: malformed key '{key}': {why}")
+            steps.append(int(text))
+    return tuple(steps)
+
+
+def format_key_path(steps) -> str:
+    """The text of key path ``steps`` (``parse_key_path``'s inverse): ``a.b[2].c``."""
+    text = ""
+    for step in steps:
+        text += f"[{step}]" if isinstance(step, int) else (f".{step}" if text else step)
+    return text
+
+
 def apply_overrides(schema, value, overrides, where: str = "--set"):
     """Applies ``KEY=VALUE`` overrides (dotted keys, YAML values) to ``value`` of ``schema``.
 
+    A key may index lists (``scene.object.position[0]=0.55``, ``m[1][0]=2``,
+    ``pushes[0].time=1.5``): that item alone is set and the rest of the list is kept; a mapping
+    given for an item that is a section keeps the item's other keys, as for any section.
+
     Raises:
-        ConfigError: for a malformed override, an unknown key or a bad value.
+        ConfigError: for a malformed override, an unknown key, an index on a value that is not
+            a list or past its end, or a bad value; naming the override.
     """
     for item in overrides:
         key, sep, text = item.partition("=")
-        if not sep or not key or any(not part for part in key.split(".")):
-            raise ConfigError(f"{where} {item!r}: expected KEY=VALUE")
-        for part in reversed(key.split(".")):
+        at = f"{where} {item!r}"
+        if not sep or not key.strip():
+            raise ConfigError(f"{at}: expected KEY=VALUE")
+        steps = parse_key_path(key, at)
+        first = next((i for i, step in enumerate(steps) if isinstance(step, int)), None)
+        if first is not None:  # the list is rewritten whole with its item replaced
+            text = _list_with_item(value, steps, first, text, at)
+            steps = steps[:first]
+        for part in reversed(steps):
             text = f"{{{part}: {text}}}"
-        value = load_typed(schema, data=text, defaults=value, where=f"{where} {item!r}")
+        value = load_typed(schema, data=text, defaults=value, where=at)
+    return value
+
+
+def _list_with_item(value, steps, first: int, text: str, where: str) -> str:
+    """YAML text of the list at ``steps[:first]`` in ``value``, with the item at the rest of
+    ``steps`` replaced by the YAML ``text``."""
+    node = value
+    for i, name in enumerate(steps[:first]):
+        fields = _fields(type(node))
+        if fields is not None and name in fields:
+            node = getattr(node, name)
+        elif isinstance(node, dict) and name in node:
+            node = node[name]
+        else:
+            known = f" (known here: {', '.join(sorted(fields))})" if fields else ""
+            raise ConfigError(f"{where}: unknown key '{format_key_path(steps[: i + 1])}'{known}")
+    root = _plain(node)
+    node, done = root, steps[:first]
+    rest = steps[first:]
+    for j, step in enumerate(rest):
+        name = format_key_path(done)
+        if isinstance(step, int):
+            if not isinstance(node, list):
+                raise ConfigError(f"{where}: '{name}' is {_kind(node)}, not a list (no [{step}])")
+            if step >= len(node):
+                count = f"{len(node)} item{'' if len(node) == 1 else 's'}"
+                raise ConfigError(f"{where}: '{name}' has no item [{step}] (it has {count})")
+        elif not isinstance(node, dict):
+            raise ConfigError(f"{where}: '{name}' is {_kind(node)}, not a mapping (no '{step}')")
+        elif step not in node and j < len(rest) - 1:
+            raise ConfigError(f"{where}: unknown key '{name}.{step}'")
+        done = (*done, step)
+        if j == len(rest) - 1:
+            old = node[step] if isinstance(step, int) or step in node else None
+            node[step] = _merged(old, parse_yaml(text, where))
+        else:
+            node = node[step]
+    return yaml.dump(root, Dumper=_Dumper, default_flow_style=True, width=1 << 30).strip()
+
+
+def _merged(old, new):
+    """``new``, with the keys of ``old`` it does not have when both are mappings (deeply): an
+    item that is a section is overridden the way ``yaml_load_typed`` overrides a section."""
+    if not (isinstance(old, dict) and isinstance(new, dict)):
+        return new
+    return {**old, **{k: _merged(old.get(k), v) for k, v in new.items()}}
+
+
+def _plain(value):
+    """``value`` as plain YAML data: dataclasses and Drake structs as mappings of their fields,
+    tuples and arrays as lists, NumPy scalars as Python numbers."""
+    fields = _fields(type(value))
+    if fields is not None:
+        return {name: _plain(getattr(value, name)) for name in fields}
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if hasattr(value, "tolist"):  # NumPy arrays and scalars
+        return _plain(value.tolist())
     return value
 
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic_many
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 100
 PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN = 254, 0, 205
@@ -152,6 +153,8 @@ def save_map(
 
     A cell is occupied (0) when its value is at least round(occupied_thresh * 100), free (254)
     when it is in [0, round(free_thresh * 100)], else unknown (205). Missing folders are made.
+    Both files are written atomically, as a pair (``files.write_atomic_many``): an existing map
+    is either left whole or replaced whole.
 
     Returns:
         (pgm path, yaml path).
@@ -164,11 +167,9 @@ def save_map(
     image[(cells >= 0) & (cells <= round(free_thresh * 100))] = PGM_FREE
     image[(cells >= round(occupied_thresh * 100)) & (cells <= 100)] = PGM_OCCUPIED
     rows, cols = cells.shape
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    pgm.write_bytes(b"P5\n%d %d\n255\n" % (cols, rows) + np.flipud(image).tobytes())
     origin = ", ".join(_number(v) for v in occupancy_map.origin)
     name = pgm.name if _PLAIN.fullmatch(pgm.name) else json.dumps(pgm.name)
-    yml.write_text(
+    text = (
         f"image: {name}\n"
         "mode: trinary\n"
         f"resolution: {_number(occupancy_map.resolution)}\n"
@@ -177,6 +178,8 @@ def save_map(
         f"occupied_thresh: {_number(occupied_thresh)}\n"
         f"free_thresh: {_number(free_thresh)}\n"
     )
+    image_bytes = b"P5\n%d %d\n255\n" % (cols, rows) + np.flipud(image).tobytes()
+    write_atomic_many([(pgm, image_bytes), (yml, text)], "map")
     return pgm, yml
 
 

@@ -14,6 +14,7 @@ import yaml
 
 from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 
 
 @dc.dataclass
@@ -165,4 +166,4 @@ def load_robot_params(filename: str | Path) -> RobotParams:
 
 def write_robot_params(params: RobotParams, filename: str | Path) -> None:
     """Writes ``params`` as a complete robot YAML file."""
-    Path(filename).write_text(yaml.safe_dump(params.to_dict(), sort_keys=False))
+    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")

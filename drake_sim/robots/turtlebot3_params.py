@@ -20,6 +20,7 @@ import yaml
 
 from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 
 
 @dc.dataclass
@@ -260,4 +261,4 @@ def load_turtlebot3_params(filename: str | Path) -> Turtlebot3Params:
 
 def write_turtlebot3_params(params: Turtlebot3Params, filename: str | Path) -> None:
     """Writes ``params`` as a complete TurtleBot3 YAML file."""
-    Path(filename).write_text(yaml.safe_dump(params.to_dict(), sort_keys=False))
+    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")

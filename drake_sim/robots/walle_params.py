@@ -17,6 +17,7 @@ import yaml
 
 from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 from drake_sim.robots.ddrive_params import MotorParams, WheelParams  # The same parts.
 
 GRAVITY = 9.81  # m/s^2.
@@ -217,4 +218,4 @@ def load_walle_params(filename: str | Path) -> WalleParams:
 
 def write_walle_params(params: WalleParams, filename: str | Path) -> None:
     """Writes ``params`` as a complete Wall-E YAML file."""
-    Path(filename).write_text(yaml.safe_dump(params.to_dict(), sort_keys=False))
+    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")

@@ -15,7 +15,7 @@ Sweep file (YAML; paths relative to the file; unknown keys are errors)::
     seed: 0                       # the sweep's seed: every random draw and rollout seed
     samples: 1                    # random draws per grid point (default 1)
     repeats: 2                    # rollouts (seeds) per draw (default 1)
-    parameters:                   # dotted paths into the runner's scenario
+    parameters:                   # --set keys into the runner's scenario (a.b[2].c)
       robot.body.mass: {grid: [2.0, 2.5, 3.5]}             # every value (Cartesian product)
       flip.drive_speed: {uniform: [0.6, 1.0]}              # [low, high), low < high
       imu.angular_velocity_noise: {normal: [0.01, 0.002]}  # [mean, sigma], sigma >= 0
@@ -47,13 +47,16 @@ Command::
     python -m drake_sim.sweep --plot DIR
 
 ``DIR/results.csv`` has the columns ``index, status, success, seed``, the parameters, the
-metrics, then ``wall_time_s, worker, reason``; a row is flushed as each rollout finishes, and
-``--resume`` runs only the indices not in it. ``DIR/sweep.json`` describes the sweep (for
-``--plot``) and ``DIR/summary.json`` holds the summary printed at the end: rollouts, success
-rate with a Wilson 95 % interval, each metric's median, min and max. Ctrl-C or SIGTERM cancels
-what has not started (local workers finish and write the rollout they are running; Ray
-cancels it), keeps every row written, prints one line and exits 0 (the project's convention
-for a user stop). Exit code 2 with one stderr line on bad input.
+metrics, then ``wall_time_s, worker, reason``; it is saved, rewritten whole and atomically, as
+each rollout finishes (a stop never leaves a cut row, nor a header-only table), and
+``--resume`` runs only the indices not in it, keeping its rows as they are.
+``DIR/sweep.json`` describes the sweep (for ``--plot``) and ``DIR/summary.json`` holds the
+summary printed at the end: rollouts, success rate with a Wilson 95 % interval, each metric's
+median, min and max. Ctrl-C or SIGTERM cancels what has not started (local workers finish and
+write the rollout they are running; Ray cancels it), keeps every row written, prints one line
+and exits 0 (the project's convention for a user stop). Exit code 2 with one stderr line on
+bad input, and when Ray is missing or cannot start for ``--backend ray`` (before the plan is
+printed or any file written).
 
 Modules: ``spec`` (file and rollout list), ``runners`` (what a worker runs), ``backends``
 (local processes, Ray), ``table`` (CSV), ``execute`` (the loop), ``summary``, ``plot``,

@@ -116,18 +116,35 @@ class LocalBackend:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def import_ray():
+    """The ``ray`` module.
+
+    Raises:
+        ConfigError: Ray is not installed (or cannot be imported).
+    """
+    try:
+        import ray
+    except ImportError:
+        raise ConfigError(
+            "--backend ray: Ray is not installed (pip install 'ray>=2.30', or "
+            "pip install -e .[ray])"
+        ) from None
+    return ray
+
+
+def check_backend(name: str) -> None:
+    """Raises ``ConfigError`` at once when backend ``name`` cannot run here (Ray not
+    installed), so that the command fails before it prints or writes anything."""
+    if name == "ray":
+        import_ray()
+
+
 class RayBackend:
     """Ray tasks, one CPU each: on the cluster at ``address`` (``auto`` joins the one this
     machine belongs to), or on a local Ray instance of ``workers`` CPUs when it is None."""
 
     def __init__(self, workers: int, address: str | None = None):
-        try:
-            import ray
-        except ImportError:
-            raise ConfigError(
-                "--backend ray: Ray is not installed (pip install 'ray>=2.30', or "
-                "pip install -e .[ray])"
-            ) from None
+        ray = import_ray()
         self._ray = ray
         try:
             if address is not None:

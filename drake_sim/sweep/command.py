@@ -6,7 +6,7 @@ from pathlib import Path
 
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
-from drake_sim.sweep.backends import BACKENDS, make_backend
+from drake_sim.sweep.backends import BACKENDS, check_backend, make_backend
 from drake_sim.sweep.execute import execute, header, write_sweep_info
 from drake_sim.sweep.plot import plot_sweep
 from drake_sim.sweep.runners import make_job
@@ -54,29 +54,28 @@ def main(argv=None) -> int:
         for path in plot_sweep(args.plot):
             print(f"wrote {path}")
         return cli.EXIT_OK
+    check_backend(args.backend)  # a missing Ray fails here, before anything is written
     spec = load_sweep(args.sweep)
     job = make_job(spec)  # checks runner, options, paths and metrics before anything runs
     out = args.out if args.out is not None else DEFAULT_OUT / spec.name
     every = rollouts(spec)[: args.limit]
-    table = Table(out / TABLE_FILE, header(spec), resume=args.resume)
+    table = Table(out / TABLE_FILE, header(spec), resume=args.resume)  # written with its rows
+    todo = [r for r in every if r.index not in table.done]
+    workers = args.workers or os.cpu_count() or 1
+    # Started (or joined, for Ray) before the plan is printed: a failure is one line, no files.
+    backend = make_backend(args.backend, workers=workers, address=args.address) if todo else None
     try:
         write_sweep_info(spec, out)
-        todo = [r for r in every if r.index not in table.done]
-        workers = args.workers or os.cpu_count() or 1
         print(
             f"{spec.name}: {len(todo)} of {len(every)} rollouts to run ({spec.runner}, "
             f"{args.backend} backend, {workers} worker{'s' if workers > 1 else ''}) "
             f"-> {table.path}",
             flush=True,
         )
-        finished = True
-        if todo:
-            backend = make_backend(args.backend, workers=workers, address=args.address)
-            try:
-                finished = execute(spec, job, todo, table, backend)
-            finally:
-                backend.close()
+        finished = execute(spec, job, todo, table, backend) if backend is not None else True
     finally:
+        if backend is not None:
+            backend.close()
         table.close()
     _, rows = read_rows(table.path)
     wanted = {r.index for r in every}

@@ -1,7 +1,7 @@
 """Running a sweep: the rollouts not yet in the table go to the backend, and each result becomes
-a table row (parameters, seed, kept metrics, success, status, wall time, worker) the moment it
-arrives. A user stop (Ctrl-C, SIGTERM) cancels what has not started and keeps every row
-already written.
+a table row (parameters, seed, kept metrics, success, status, wall time, worker) saved the
+moment it arrives. A user stop (Ctrl-C, SIGTERM) cancels what has not started and keeps every
+row already saved, and the one being saved when the stop came.
 """
 
 import dataclasses as dc
@@ -48,23 +48,24 @@ def write_sweep_info(spec: SweepSpec, out: Path) -> None:
 
 
 def execute(spec: SweepSpec, job: dict, todo: list[Rollout], table: Table, backend) -> bool:
-    """Runs ``todo`` on ``backend``, appending each row to ``table`` as it arrives.
+    """Runs ``todo`` on ``backend``, saving each row in ``table`` as it arrives.
 
     Returns:
         True if every rollout ran, False if a user stop ended the sweep early (the rows that
         finished are in the table either way).
     """
     plain = [dc.asdict(r) for r in todo]
+    arrived = None  # A result whose row a stop may have cut off while it was being saved.
     with tqdm(total=len(todo), unit="rollout", disable=None, leave=False) as bar:
         try:
-            for result in backend.run(job, plain):
-                table.append(make_row(spec, result))
+            for arrived in backend.run(job, plain):
+                table.append(make_row(spec, arrived))
                 bar.update()
         except BaseException as e:  # a stop may surface as another error: see cli.is_stop
             if not cli.is_stop(e):
                 raise
-            for result in backend.stop():
-                if result["index"] not in table.done:
+            for result in [arrived, *backend.stop()]:
+                if result is not None and result["index"] not in table.done:
                     table.append(make_row(spec, result))
             return False
     return True

@@ -1,16 +1,19 @@
 """``--plot DIR``: pictures of a finished (or stopped) sweep, from its table and ``sweep.json``.
 
 Writes ``success.png`` (success rate with its Wilson 95 % interval, overall and per value of
-each grid parameter), ``hist_<metric>.png`` and ``<metric>_vs_<parameter>.png``. matplotlib is
-optional: without it this is one line on stderr and exit code 2.
+each grid parameter), ``hist_<metric>.png`` and ``<metric>_vs_<parameter>.png``, each
+atomically (a stop leaves the old picture or the new one). matplotlib is optional: without it
+this is one line on stderr and exit code 2.
 """
 
+import io
 import json
 import re
 from pathlib import Path
 
 from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 from drake_sim.sweep.execute import SWEEP_FILE
 from drake_sim.sweep.summary import numeric, wilson_interval
 from drake_sim.sweep.table import TABLE_FILE, read_rows
@@ -53,9 +56,10 @@ def plot_sweep(folder: Path) -> list[Path]:
     def save(fig, name: str) -> None:
         path = folder / f"{_slug(name)}.png"
         fig.tight_layout()
-        fig.savefig(path, dpi=100)
+        png = io.BytesIO()
+        fig.savefig(png, format="png", dpi=100)
         plt.close(fig)
-        written.append(path)
+        written.append(write_atomic(path, png.getvalue(), "plot"))
 
     if info["success"]:
         groups = [("all", rows)]

@@ -11,7 +11,6 @@ import dataclasses as dc
 import json
 import logging
 import os
-import re
 import socket
 import time
 from pathlib import Path
@@ -20,55 +19,42 @@ from drake_sim.base import config
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 
-_INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
-
 
 def resolve(value, path: str, where: str):
-    """The value at dotted ``path`` (``a.b[2]``) inside dataclass ``value``.
+    """The value at ``path`` (a ``--set`` key: ``a.b[2]``, ``m[1][0]``) inside dataclass
+    ``value``.
 
     Raises:
         ConfigError: naming the first part of the path that does not exist.
     """
-    match = _INDEXED.match(path)
-    dotted, index = (match.group(1), int(match.group(2))) if match else (path, None)
+    steps = config.parse_key_path(path, f"{where}: parameter path")
     walked = []
-    for part in dotted.split("."):
-        if not dc.is_dataclass(value) or part not in {f.name for f in dc.fields(value)}:
+    for step in steps:
+        if isinstance(step, int):
+            here = config.format_key_path(walked)
+            if not isinstance(value, list | tuple) or step >= len(value):
+                raise ConfigError(f"{where}: parameter path '{path}': {here} has no item {step}")
+            value = value[step]
+        elif not dc.is_dataclass(value) or step not in {f.name for f in dc.fields(value)}:
             known = ", ".join(f.name for f in dc.fields(value)) if dc.is_dataclass(value) else ""
-            here = ".".join(walked) or "the scenario"
+            here = config.format_key_path(walked) or "the scenario"
             hint = f" (known in {here}: {known})" if known else ""
             raise ConfigError(f"{where}: unknown parameter path '{path}'{hint}")
-        value = getattr(value, part)
-        walked.append(part)
-    if index is not None:
-        if not isinstance(value, list | tuple) or index >= len(value):
-            raise ConfigError(f"{where}: parameter path '{path}': {dotted} has no item {index}")
-        value = value[index]
-    elif dc.is_dataclass(value):
+        else:
+            value = getattr(value, step)
+        walked.append(step)
+    if dc.is_dataclass(value):
         raise ConfigError(f"{where}: parameter path '{path}' is a section, not a value")
     return value
 
 
-def override_strings(base, overrides: dict) -> list[str]:
-    """``--set``-style ``KEY=VALUE`` strings for ``overrides`` (path -> value) on ``base``.
+def override_strings(overrides: dict) -> list[str]:
+    """``--set``-style ``KEY=VALUE`` strings for ``overrides`` (path -> value), in order.
 
-    An indexed path (``scene.object.position[1]``) sets one item of a list, so its string
-    carries the whole list with that item replaced. Values are written as JSON (which YAML
-    reads), so strings stay strings.
+    Values are written as JSON (which YAML reads), so strings stay strings; an indexed path
+    (``scene.object.position[1]``) sets that one item (``config.apply_overrides``).
     """
-    lists = {}
-    out = []
-    for path, value in overrides.items():
-        match = _INDEXED.match(path)
-        if match is None:
-            out.append(f"{path}={json.dumps(value)}")
-            continue
-        key, index = match.group(1), int(match.group(2))
-        if key not in lists:
-            lists[key] = list(resolve(base, key, "override"))
-        lists[key][index] = value
-    out += [f"{key}={json.dumps(items)}" for key, items in lists.items()]
-    return out
+    return [f"{path}={json.dumps(value)}" for path, value in overrides.items()]
 
 
 class RobotRunner:
@@ -94,9 +80,9 @@ class RobotRunner:
         loaded = load_scenario(scenario)
         on_robot = {k[len("robot.") :]: v for k, v in overrides.items() if k.startswith("robot.")}
         on_scenario = {k: v for k, v in overrides.items() if not k.startswith("robot.")}
-        robot = config.apply_overrides(robot_schema, robot, override_strings(robot, on_robot))
+        robot = config.apply_overrides(robot_schema, robot, override_strings(on_robot))
         validate(robot, "robot override")
-        strings = override_strings(loaded, on_scenario)
+        strings = override_strings(on_scenario)
         loaded = config.apply_overrides(schema, loaded, strings)
         check(loaded, "override")
         return robot, loaded
@@ -231,8 +217,7 @@ class PickPlaceRunner:
 
         overrides = dict(overrides)
         scene_number = overrides.pop("scene", None)
-        base = load_pickplace_scenario(scenario)
-        strings = override_strings(base, overrides)
+        strings = override_strings(overrides)
         if seed is not None and "planner.seed" not in overrides:
             strings.append(f"planner.seed={seed}")
         loaded = load_pickplace_scenario(scenario, overrides=strings)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_sim.base.config import parse_yaml, read_text
+from drake_sim.base.config import parse_key_path, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.sweep.table import FIRST_COLUMNS, LAST_COLUMNS
 
@@ -34,7 +34,6 @@ DISTRIBUTIONS = ("grid", "uniform", "normal", "choice", "random")
 # Kinds enumerated like a grid: ``random: N`` is the numbers 0 to N - 1 of values the runner
 # generates (``scene: {random: 200}``: pick-and-place scenes 0 to 199).
 ENUMERATED = ("grid", "random")
-_PATH = re.compile(r"^[A-Za-z_]\w*(\.[A-Za-z_]\w*)*(\[\d+\])?$")
 _COMPARISON = re.compile(r"^\s*([A-Za-z_]\w*)\s*(>=|<=|==|!=|>|<)\s*(\S.*?)\s*$")
 _SEED_BITS = 31  # Per-rollout seeds fit a signed 32-bit int (Drake's RandomGenerator takes them).
 
@@ -43,7 +42,7 @@ _SEED_BITS = 31  # Per-rollout seeds fit a signed 32-bit int (Drake's RandomGene
 class Parameter:
     """One varied value: its dotted path in the runner's scenario and how it is varied."""
 
-    path: str  # e.g. "flip.drive_speed", "robot.body.mass", "scene.object.position[1]".
+    path: str  # A --set key: "flip.drive_speed", "robot.body.mass", "scene.object.position[1]".
     kind: str  # One of DISTRIBUTIONS.
     values: tuple  # grid/choice: the values; uniform: (low, high); normal: (mean, sigma).
 
@@ -210,11 +209,12 @@ def _draw(p: Parameter, rng: np.random.Generator):
 
 
 def _parameter(path, spec, where: str) -> Parameter:
-    if not isinstance(path, str) or not _PATH.match(path):
+    if not isinstance(path, str):
         raise ConfigError(
             f"{where}: parameter {path!r} is not a dotted path (e.g. flip.drive_speed, "
             "scene.object.position[0])"
         )
+    parse_key_path(path, f"{where}: parameter {path!r} is not a dotted path")
     at = f"{where}: parameter '{path}'"
     if not isinstance(spec, dict) or len(spec) != 1:
         raise ConfigError(f"{at} must be one of {{{': ..., '.join(DISTRIBUTIONS)}: ...}}")

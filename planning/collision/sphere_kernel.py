@@ -755,11 +755,11 @@ def cache_is_cold(dispatcher=None) -> bool:
         return False
 
 
-def announce_compile(*others) -> bool:
-    """Prints ``COMPILE_NOTE`` on stderr when ``prefixes`` (or one of the ``others``
-    dispatchers) is about to be compiled (``cache_is_cold``), at most once per process; only the
-    first call looks at the cache, later calls return at once. Call it just before the first
-    call.
+def announce_compile(*others, note: str = COMPILE_NOTE, kernel: bool = True) -> bool:
+    """Prints ``note`` on stderr when ``prefixes`` (unless ``kernel`` is False) or one of the
+    ``others`` dispatchers is about to be compiled (``cache_is_cold``), at most once per
+    process; only the first call looks at the cache, later calls return at once. Call it just
+    before the first call.
 
     Returns:
         True when it printed the note.
@@ -771,9 +771,9 @@ def announce_compile(*others) -> bool:
         if _announce_done:
             return False
         _announce_done = True
-        if not (cache_is_cold() or any(cache_is_cold(o) for o in others)):
+        if not ((kernel and cache_is_cold()) or any(cache_is_cold(o) for o in others)):
             return False
-    print(COMPILE_NOTE, file=sys.stderr, flush=True)
+    print(note, file=sys.stderr, flush=True)
     return True
 
 

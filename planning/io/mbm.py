@@ -1,14 +1,31 @@
-"""MotionBenchMaker (MBM) Panda problems: locating, unpacking and reading them.
+"""MotionBenchMaker (MBM) problems: finding, downloading, unpacking and reading them.
 
-A problem folder (``problems/<family>/``) holds ``sceneNNNN.yaml`` (a MoveIt PlanningScene) and
-``requestNNNN.yaml`` (a MoveIt MotionPlanRequest with a start state and one joint-space goal).
-The repository ships the 700 problems as ``benchmarks/data/mbm_panda/problems.tar.bz2``
-(``default_dataset``); that folder's README.md says where they come from.
+A problems folder holds one folder per scene family (``box_panda/``, ...), each with
+``sceneNNNN.yaml`` (a MoveIt PlanningScene) and ``requestNNNN.yaml`` (a MoveIt
+MotionPlanRequest with a start state and one joint-space goal). The sets are third-party data
+(Chamzas et al., "MotionBenchMaker", IEEE RA-L 2022) and are not part of this repository:
+``find_problems`` takes them, in this order, from
+
+1. a path the caller gives (``--dataset``): a problems folder, a folder holding ``problems/``
+   or ``problems.tar.bz2``, or the archive itself;
+2. the environment variable ``DRAKE_SIM_MBM``, in the same forms;
+3. the cache, ``<cache_dir()>/mbm/<robot>/`` (``drake_sim.base.resources.cache_dir``);
+4. else the source distribution of the ``vamp-planner`` package (Apache-2.0; VAMP ships the
+   MBM sets of the Panda, UR5, Fetch and Baxter as ``resources/<robot>/problems.tar.bz2``),
+   downloaded once with pip from the package index and unpacked into the cache.
+
+Archives are unpacked beside their destination and renamed into place, so neither processes
+running at the same time nor a run stopped half-way ever see a half-unpacked set. A set that
+cannot be had raises ``MbmDataError``, one line naming what failed.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
 import shutil
+import subprocess
+import sys
 import tarfile
 import tempfile
 from collections.abc import Iterator
@@ -18,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import cache_dir
 from planning.model.panda import ARM_JOINTS, FINGER_JOINTS
 
 FAMILIES = (
@@ -29,10 +48,33 @@ FAMILIES = (
     "bookshelf_thin_panda",
     "cage_panda",
 )
+"""The Panda's scene families, 100 problems each."""
 
-# The checkout's root, found as drake_sim.base.resources finds models/ and config/: the data is
-# not part of the installed packages, so the project is installed from its checkout (-e).
-_ROOT = Path(__file__).resolve().parents[2]
+ENV_VAR = "DRAKE_SIM_MBM"
+"""The environment variable that names a problems folder or ``problems.tar.bz2``."""
+
+VAMP_PACKAGE = "vamp-planner"
+VAMP_VERSION = "0.6.4"
+"""The release of ``vamp-planner`` whose source distribution the sets are taken from."""
+
+ARCHIVE_SHA256 = {
+    "panda": "4e1509e99c53da769ee6a338cf1173ecf601e4ec16f24081d3894ef358243b69",
+    "ur5": "576c199b30a0150d176362207494e6f3e409eb74c55f5225e671a00decfcb5b0",
+    "fetch": "8f5d7a38acbd56326ba75b48c2a0058abc8ec7eaf0f5ea9786a881d1efbfacce",
+    "baxter": "2326af3f436c4312b175617b8388a701994da5e4fabd19b84b66acd4d88b61ff",
+}
+"""SHA-256 of each robot's ``problems.tar.bz2`` in that release (the robots it has sets of)."""
+
+_HINT = f"give a problems folder or problems.tar.bz2 with --dataset or {ENV_VAR}"
+
+
+class MbmDataError(ConfigError):
+    """An MBM set cannot be found, downloaded or unpacked: the message is one line naming the
+    path, the robot or the step that failed (a ``ConfigError``, so a command-line entry point
+    prints it and exits with code 2)."""
+
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))
 
 
 @dataclass
@@ -61,44 +103,199 @@ class MbmRequest:
     q_goal: np.ndarray
 
 
-def default_dataset() -> Path:
-    """Returns the repository's copy of the problems, the folder ``benchmarks/data/mbm_panda``
-    holding ``problems.tar.bz2`` (the default of ``python -m planning.benchmark``).
+def find_problems(dataset: Path | str | None = None, *, robot: str = "panda") -> Path:
+    """Returns the folder of a robot's MBM problems, found, downloaded or unpacked as needed.
+
+    Args:
+        dataset: a problems folder, a folder holding ``problems/`` or ``problems.tar.bz2``,
+            or the archive itself; ``None`` looks at ``$DRAKE_SIM_MBM``, then the cache, then
+            downloads (see the module docstring).
+        robot: the robot whose set the cache holds or the download brings: one of
+            ``ARCHIVE_SHA256`` ("panda", "ur5", "fetch", "baxter"). A given path or
+            ``$DRAKE_SIM_MBM`` is used as it is.
 
     Raises:
-        FileNotFoundError: the archive is not there (the project is not run from its checkout).
+        MbmDataError: an unknown robot, a path that is no set, a corrupt archive, or a download
+            that failed (pip missing, no network).
     """
-    folder = _ROOT / "benchmarks" / "data" / "mbm_panda"
-    if not (folder / "problems.tar.bz2").is_file():
-        raise FileNotFoundError(
-            f"MBM problems not found (looked for {folder / 'problems.tar.bz2'}); "
-            "install the project with `pip install -e .` from its checkout"
+    _check_robot(robot)
+    if dataset is not None:
+        return problems_folder(dataset)
+    if os.environ.get(ENV_VAR):
+        try:
+            return problems_folder(os.environ[ENV_VAR])
+        except MbmDataError as e:
+            raise MbmDataError(f"{ENV_VAR}: {e}") from None
+    cached = cached_folder(robot)
+    if _is_problems_folder(cached):
+        return cached
+    return download(robot)
+
+
+def cached_folder(robot: str = "panda") -> Path:
+    """Returns where the cache keeps a robot's downloaded set, ``<cache_dir()>/mbm/<robot>``
+    (which may not exist yet)."""
+    return cache_dir() / "mbm" / robot
+
+
+def problems_folder(dataset: Path | str) -> Path:
+    """Returns the problems folder of a path: the folder itself, its ``problems/``, or the
+    unpacked ``problems.tar.bz2`` it holds or is (unpacked once into the cache, under a hash of
+    the archive's contents).
+
+    Raises:
+        MbmDataError: the path does not exist, is none of those, or its archive is unreadable.
+    """
+    dataset = Path(dataset)
+    if not dataset.exists():
+        raise MbmDataError(f"MBM problems not found: {dataset} does not exist")
+    for folder in (dataset, dataset / "problems"):
+        if _is_problems_folder(folder):
+            return folder
+    archive = dataset / "problems.tar.bz2" if dataset.is_dir() else dataset
+    if not archive.is_file():
+        raise MbmDataError(
+            f"{dataset}: neither a folder of MBM problems nor problems.tar.bz2 "
+            "(nor a folder holding problems/ or problems.tar.bz2)"
         )
-    return folder
+    try:
+        digest = hashlib.sha256(archive.read_bytes()).hexdigest()
+    except OSError as e:
+        raise MbmDataError(f"{archive} cannot be read ({e.strerror})") from None
+    return unpack(archive, cache_dir() / "mbm" / "unpacked" / digest[:16])
+
+
+def download(robot: str = "panda") -> Path:
+    """Downloads the ``vamp-planner`` source distribution with pip into a temporary folder,
+    checks the robot's ``problems.tar.bz2`` in it against ``ARCHIVE_SHA256`` and unpacks it into
+    ``cached_folder(robot)``; returns that folder. Does nothing when the cache holds the set.
+
+    Prints one line on stderr when it downloads (about 65 MB, a few seconds). A failure or an
+    interruption at any step leaves no set in the cache.
+
+    Raises:
+        MbmDataError: an unknown robot, pip missing or failing (no network), or an archive
+            that is missing from the distribution, corrupt or not the expected one.
+    """
+    _check_robot(robot)
+    target = cached_folder(robot)
+    if _is_problems_folder(target):
+        return target
+    print(
+        f"note: downloading the MotionBenchMaker {robot} problems ({VAMP_PACKAGE} "
+        f"{VAMP_VERSION} sdist, ~65 MB) into {target}",
+        file=sys.stderr,
+        flush=True,
+    )
+    with tempfile.TemporaryDirectory(prefix="drake_sim-vamp-") as scratch:
+        sdist = _pip_download(Path(scratch) / "sdist")
+        archive = Path(scratch) / "problems.tar.bz2"
+        _extract_archive(sdist, robot, archive)
+        digest = hashlib.sha256(archive.read_bytes()).hexdigest()
+        if digest != ARCHIVE_SHA256[robot]:
+            raise MbmDataError(
+                f"{sdist.name}: resources/{robot}/problems.tar.bz2 has SHA-256 {digest}, "
+                f"expected {ARCHIVE_SHA256[robot]}"
+            )
+        return unpack(archive, target)
 
 
 def unpack(archive: Path | str, destination: Path | str) -> Path:
-    """Unpacks ``problems.tar.bz2`` into ``destination`` (once) and returns its problems folder.
+    """Unpacks the ``problems/`` folder of a ``problems.tar.bz2`` as ``destination`` (once) and
+    returns ``destination``.
 
-    The archive is unpacked beside the folder and renamed into place, so processes running at
-    the same time never see a half-unpacked folder."""
-    destination = Path(destination)
-    folder = destination / "problems"
-    if (folder / FAMILIES[0]).is_dir():
-        return folder
-    destination.mkdir(parents=True, exist_ok=True)
-    scratch = Path(tempfile.mkdtemp(prefix=".unpacking-", dir=destination))
+    The archive is unpacked into a temporary folder beside ``destination`` and renamed into
+    place, so processes running at the same time, or a run stopped half-way, never see a
+    half-unpacked folder; the temporary folder is removed on any error.
+
+    Raises:
+        MbmDataError: the archive cannot be read or holds no ``problems/`` folder of scenes.
+    """
+    archive, destination = Path(archive), Path(destination)
+    if _is_problems_folder(destination):
+        return destination
+    destination.parent.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=f".{destination.name}-", dir=destination.parent))
     try:
-        with tarfile.open(archive, "r:bz2") as tar:
-            tar.extractall(scratch, filter="data")
         try:
-            (scratch / "problems").rename(folder)
-        except OSError:  # another process put it there first
-            if not (folder / FAMILIES[0]).is_dir():
-                raise
+            with tarfile.open(archive, "r:bz2") as tar:
+                tar.extractall(scratch, filter="data")
+        except (tarfile.TarError, OSError, EOFError) as e:
+            raise MbmDataError(f"{archive}: not a readable problems.tar.bz2 ({e})") from None
+        if not _is_problems_folder(scratch / "problems"):
+            raise MbmDataError(f"{archive}: holds no problems/ folder of MBM scenes")
+        try:
+            (scratch / "problems").rename(destination)
+        except OSError as e:  # another process may have put it there first
+            if not _is_problems_folder(destination):
+                raise MbmDataError(f"cannot unpack into {destination} ({e.strerror})") from None
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-    return folder
+    return destination
+
+
+def _check_robot(robot: str) -> None:
+    if robot not in ARCHIVE_SHA256:
+        raise MbmDataError(f"unknown MBM robot {robot!r} (known: {', '.join(ARCHIVE_SHA256)})")
+
+
+def _is_problems_folder(folder: Path) -> bool:
+    """Whether ``folder`` holds at least one family folder with scenes."""
+    return folder.is_dir() and next(folder.glob("*/scene*.yaml"), None) is not None
+
+
+def _pip_download(folder: Path) -> Path:
+    """Runs ``pip download`` of the release's source distribution into ``folder``; returns the
+    downloaded file."""
+    requirement = f"{VAMP_PACKAGE}=={VAMP_VERSION}"
+    # --no-binary for this package alone: its sdist holds the sets, its wheels do not (and
+    # :all: would build the build tools from source too).
+    command = [
+        sys.executable,
+        "-m",
+        "pip",
+        "download",
+        "--no-deps",
+        "--no-binary",
+        VAMP_PACKAGE,
+        requirement,
+        "--dest",
+        str(folder),
+        "--disable-pip-version-check",
+        "--no-input",
+        "--quiet",
+    ]
+    failed = f"cannot download the MBM problems: `pip download {requirement}`"
+    try:
+        result = subprocess.run(command, capture_output=True, text=True, check=False)
+    except OSError as e:
+        raise MbmDataError(f"{failed} did not start ({e.strerror}); {_HINT}") from None
+    if result.returncode != 0:
+        lines = [line for line in (result.stderr + result.stdout).splitlines() if line.strip()]
+        why = lines[-1].strip() if lines else f"exit code {result.returncode}"
+        raise MbmDataError(f"{failed} failed ({why}); {_HINT}")
+    sdists = sorted(folder.glob("vamp_planner-*.tar.gz"))
+    if not sdists:
+        raise MbmDataError(f"{failed} gave no vamp_planner-*.tar.gz; {_HINT}")
+    return sdists[0]
+
+
+def _extract_archive(sdist: Path, robot: str, out: Path) -> None:
+    """Copies ``resources/<robot>/problems.tar.bz2`` out of the source distribution."""
+    name = f"vamp_planner-{VAMP_VERSION}/resources/{robot}/problems.tar.bz2"
+    try:
+        with tarfile.open(sdist, "r:gz") as tar:
+            try:
+                member = tar.getmember(name)
+            except KeyError:
+                raise MbmDataError(f"{sdist.name} holds no {name}") from None
+            source = tar.extractfile(member)
+            if source is None:
+                raise MbmDataError(f"{sdist.name}: {name} is not a file")
+            with source, out.open("wb") as sink:
+                shutil.copyfileobj(source, sink)
+    except (tarfile.TarError, OSError, EOFError) as e:
+        raise MbmDataError(f"{sdist.name}: not a readable source distribution ({e})") from None
 
 
 def iter_problems(

@@ -20,6 +20,11 @@ A PlanningScene YAML is read as MoveIt reads it:
 - ``allowed_collision_matrix``: pairs of Panda links allowed to touch become collision filters
   on top of the robot's own; pairs naming anything else are not applied (a warning).
 
+A file with no YAML document (empty, blank, comments only) is an error, like an empty ``.scene``
+file; a PlanningScene with neither a ``name`` nor an object loads as an empty scene with one
+warning (MoveIt applies such a message as a scene without objects), and one with a name and no
+objects is a valid empty scene.
+
 Anything else raises ``PlanningError(INVALID_SCENE)`` naming the file and the key path: unknown
 keys, values of the wrong type, NaN, meshes, planes, cones, octomaps, link padding or scaling, a
 moved robot base, unknown frames or joints, and scene diffs (``is_diff``).
@@ -53,13 +58,16 @@ def load_moveit_scene(scene, filename: Path | str) -> None:
     """
     path = Path(filename)
     suffix = path.suffix.lower()
-    attached, allowed = [], []
+    attached, allowed, unnamed = [], [], False
     try:
         if suffix == ".scene":
             world = parse_scene_text(read_text(path, "scene file"), str(path))
         elif suffix in (".yaml", ".yml"):
             data = parse_yaml(read_text(path, "scene file"), str(path))
+            if data is None:  # no YAML document: empty, blank or comments only
+                raise ValueError(f"{path}: empty scene file (expected a PlanningScene mapping)")
             world, attached, allowed = parse_moveit_scene(data, scene, str(path))
+            unnamed = not data.get("name")
         else:
             raise ValueError(f"{path}: not a MoveIt scene file (.scene, .yaml or .yml)")
         scene.replace(world, attached, allowed)
@@ -67,6 +75,8 @@ def load_moveit_scene(scene, filename: Path | str) -> None:
         message = e.message if isinstance(e, PlanningError) else str(e)
         where = "" if message.startswith(str(path)) else f"{path}: "
         raise PlanningError(ErrorCode.INVALID_SCENE, where + message) from None
+    if unnamed and not (world or attached):
+        _log.warning("%s: a PlanningScene with no name and no objects: the scene is empty", path)
 
 
 def parse_moveit_scene(data, scene=None, where: str = "PlanningScene"):

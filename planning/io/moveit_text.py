@@ -21,7 +21,9 @@ are separated by any white space; the scene name and object names take their who
 A file is newer when the line after its first ``*`` line holds more than one word (a pose,
 not a shape count). Objects are in the world frame; one named again replaces the earlier one,
 and one of several shapes becomes objects ``name``, ``name#1``, ... Meshes, cones and planes
-are not supported; anything after the ``.`` is ignored.
+are not supported; anything after the ``.`` is ignored. As for MoveIt, a file without its name
+line (empty, blank, or starting with ``.`` or an object) is malformed; a name line and ``.``
+alone is a valid empty scene.
 """
 
 import math
@@ -41,8 +43,17 @@ def parse_scene_text(text: str, where: str = "scene") -> list[SceneObject]:
         ValueError: naming ``where``, the line and what was expected there.
     """
     lines = text.splitlines()
-    if not lines:
-        raise ValueError(f"{where}: empty file (expected the scene name on line 1)")
+    if not text.strip():
+        raise ValueError(
+            f"{where}: empty scene file (expected the scene name on line 1, then its objects "
+            "and a '.' line)"
+        )
+    first = lines[0].strip()
+    if first == "." or first.startswith("*"):
+        raise ValueError(
+            f"{where}:1: expected the scene name, got {first!r} (a scene file starts with its "
+            "name line, as MoveIt writes it)"
+        )
     newer = _newer_format(lines)
     reader = _Reader(lines, where)
     objects: dict[str, list] = {}

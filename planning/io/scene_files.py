@@ -12,7 +12,8 @@ Our format (``config/pickplace.yaml``; world frame, metres, box centres)::
     attached: # held objects, pose in the hand's attachment frame A (same keys as objects)
 
 Loading replaces the whole scene: world objects (the table too), held objects, allowed
-collisions (back to the robot's own) and the place target.
+collisions (back to the robot's own) and the place target. An empty file (blank, or comments
+only) is an error; ``{}`` is an explicitly empty scene.
 
 MoveIt's scene files (PlanningScene YAML and the text ``.scene`` format) are read by
 ``planning.io.moveit_scene``; ``load_moveit_scene``, ``parse_moveit_objects`` and
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import yaml
 
-from drake_sim.base.config import load_typed
+from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
 from planning.io.moveit_scene import (
@@ -88,10 +89,15 @@ def load_scene_yaml(scene, filename: Path | str) -> None:
     """Replaces the whole of ``scene`` by our scene YAML (see the module's docstring).
 
     Raises:
-        PlanningError: INVALID_SCENE for a malformed file or bad values, naming the file.
+        PlanningError: INVALID_SCENE for a malformed or empty file (no YAML document: blank or
+            comments only; ``{}`` is an explicitly empty scene) or bad values, naming the file.
     """
+    where = str(filename)
     try:
-        spec = load_typed(SceneFile, filename=filename)
+        text = read_text(filename, "scene file")
+        if parse_yaml(text, where) is None:
+            raise ConfigError(f"{where}: empty scene file (expected keys such as table, objects)")
+        spec = load_typed(SceneFile, data=text, where=where)
     except ConfigError as e:
         raise PlanningError(ErrorCode.INVALID_SCENE, str(e)) from None
     apply_scene_file(scene, spec, where=str(filename))

@@ -731,11 +731,23 @@ def warm_up(data, lower, upper, hulls=NO_HULLS) -> None:
     and ``fine_check`` now rather than in a request: a one-sample problem (``hulls``: the
     packed ``HullData``, or ``NO_HULLS``)."""
     sphere_kernel.announce_compile(solve, plan, fine_check)
+    for _, step in warm_up_steps(data, lower, upper, hulls):
+        step()
+
+
+def warm_up_steps(data, lower, upper, hulls=NO_HULLS) -> list:
+    """``warm_up`` as named steps ``(name, callable)``, one per compiled entry point, for a
+    build that reports its progress (``planning.planner_kernels``)."""
     q = np.ascontiguousarray((lower + upper) / 2.0)
     tail = (0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
-    solve(q, q, lower, upper, *pack(data), *hulls, *tail, True, 0.01)
-    plan(q, q, lower, upper, data, *tail)
-    fine_check(np.vstack([q, q]), 0.01, data, *hulls)
+    return [
+        (
+            "the compiled search",
+            lambda: solve(q, q, lower, upper, *pack(data), *hulls, *tail, True, 0.01),
+        ),
+        ("the Python pipeline's search", lambda: plan(q, q, lower, upper, data, *tail)),
+        ("the fine check", lambda: fine_check(np.vstack([q, q]), 0.01, data, *hulls)),
+    ]
 
 
 # Numba keys a cached function on its own file alone; these compile the kernels' code into theirs.

@@ -124,6 +124,21 @@ class JointPathSearch:
             if self._options.spheres.hull_proofs:  # the Python side's exact proofs (~18 ms)
                 model.prove_free((self.limits[0] + self.limits[1])[None, :] / 2.0)
 
+    def warm_up_steps(self) -> list:
+        """Everything the compiled search compiles, as named steps ``(name, callable)``: the
+        sphere covers, the search's entry points, the exact shapes' proofs and the batched
+        sphere checks (``planning.planner_kernels`` builds with them). Empty when the spheres
+        are disabled or cannot answer."""
+        model = self._sphere_model()
+        if model is None:
+            return []
+        middle = ((self.limits[0] + self.limits[1]) / 2.0)[None, :]
+        steps = [("the sphere covers", lambda: (self._refine_model(), model.packed_data()))]
+        steps += compiled_rrt.warm_up_steps(model.kernel_data(), *self.limits, self._hulls(model))
+        steps.append(("the exact shapes' proofs", lambda: model.prove_free(middle)))
+        steps.append(("the batched sphere checks", lambda: model.classify(middle)))
+        return steps
+
     def proves_free(self, q, *, first: bool = True) -> bool:
         """True when the sphere models prove the arm configuration q (7,) collision-free (then
         Drake's checker finds it free too): the first cover, then the tighter one; False when

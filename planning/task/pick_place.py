@@ -68,7 +68,7 @@ class StepReport:
 @dc.dataclass
 class TaskReport:
     """The task's outcome; ``to_dict`` gives the report keys of ``python -m drake_sim.pickplace
-    --report`` (README, Reports)."""
+    --report`` (docs/pickplace.md, The report)."""
 
     success: bool = False
     impossible: bool = False

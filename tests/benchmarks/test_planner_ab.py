@@ -1,9 +1,13 @@
 """benchmarks/planner_ab.py: the interleaved order, the report, bad input; one slow real run."""
 
 import importlib.util
+import subprocess
 from pathlib import Path
 
 import pytest
+
+from planning.io import mbm
+from tests.mbm_helpers import FakePip, mbm_problems
 
 ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("planner_ab", ROOT / "benchmarks" / "planner_ab.py")
@@ -49,6 +53,7 @@ def test_settings_change_a_section_field_with_its_type():
         ["/nonexistent/a", "/nonexistent/b"],
         [str(ROOT)],  # one checkout only
         [str(ROOT), str(ROOT), "--set", "iterations=3"],  # not section.field=value
+        [str(ROOT), str(ROOT), "--dataset", "/nonexistent/problems"],
     ],
 )
 def test_bad_input_is_one_line_and_exit_code_2(argv, capsys):
@@ -57,8 +62,20 @@ def test_bad_input_is_one_line_and_exit_code_2(argv, capsys):
     assert err.startswith("error:") and "\n" not in err
 
 
+def test_problems_that_cannot_be_had_are_one_line_and_exit_code_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path))
+    monkeypatch.delenv(mbm.ENV_VAR, raising=False)
+    failing = FakePip(returncode=1, stderr="ERROR: No matching distribution found\n")
+    monkeypatch.setattr(subprocess, "run", failing)
+    assert mut.main([str(ROOT), str(ROOT)]) == 2
+    note, err = capsys.readouterr().err.splitlines()  # no worker was started
+    assert note.startswith("note: downloading") and err.startswith("error: cannot download")
+    assert len(failing.commands) == 1
+
+
 @pytest.mark.slow
 def test_a_checkout_against_itself(capsys):
-    assert mut.main([str(ROOT), str(ROOT), "--limit", "1", "--families", "table_pick_panda"]) == 0
+    argv = [str(ROOT), str(ROOT), "--limit", "1", "--families", "table_pick_panda"]
+    assert mut.main([*argv, "--dataset", str(mbm_problems())]) == 0
     out = capsys.readouterr().out
     assert "1 problems" in out and "the same length on 100%" in out

@@ -154,4 +154,7 @@ def test_a_route_not_completed_exits_with_1(tmp_path):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "not completed" in lines[0]
     assert json.loads(report.read_text())["end"] == "duration"
-    assert (tmp_path / "m.pgm").is_file()  # the map so far is still saved
+    # The map so far is saved beside where a complete one would go, never in its place.
+    assert (tmp_path / "m.partial.pgm").is_file() and (tmp_path / "m.partial.yaml").is_file()
+    assert not (tmp_path / "m.yaml").exists()
+    assert "partial map" in result.stdout

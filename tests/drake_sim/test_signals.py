@@ -1,5 +1,5 @@
 """Every viewer entry point stops cleanly on Ctrl-C (SIGINT) and on SIGTERM: exit code 0 and its
-summary line (issue #14).
+summary line.
 
 Each runs as ``python -m ...`` with a Meshcat viewer, is waited for until it prints the line
 with its Meshcat URL that says it is running, and is then signalled. The timeouts bound a hang;
@@ -119,7 +119,7 @@ def test_pickplace_stops_during_the_task(start, tmp_path):
     cli = start("drake_sim.pickplace", "--mode", "kinematic", "--no-wait", "--report", report)
     cli.wait_for("] check ")  # the first step is done; the arm moves next
     _stopped_with(cli, signal.SIGINT, "stopped: ")
-    assert not report.exists()  # a report is of a whole task
+    assert json.loads(report.read_text())["end"] == "stopped"  # the steps done, so far
 
 
 def test_pickplace_stops_while_showing_the_result(start):
@@ -127,3 +127,92 @@ def test_pickplace_stops_while_showing_the_result(start):
     assert "http://" in cli.wait_for("showing the result")
     assert any(line.startswith("success: ") for line in cli.seen)
     assert cli.stop(signal.SIGTERM) == 0
+
+
+# ----------------------------------------------------------- headless runs, files kept ----
+@pytest.fixture(scope="module")
+def room_map(tmp_path_factory):
+    from tests import navigation_helpers
+
+    return navigation_helpers.saved_truth_map("room", tmp_path_factory.mktemp("maps"))[1]
+
+
+def test_mapping_stopped_keeps_the_map_at_out_and_saves_a_partial_one_beside_it(
+    start, tmp_path, room_map
+):
+    out = tmp_path / "room"
+    for suffix in (".yaml", ".pgm"):  # a complete map from an earlier run
+        (tmp_path / f"room{suffix}").write_bytes(room_map.with_suffix(suffix).read_bytes())
+    (tmp_path / "room.yaml").write_text(
+        room_map.read_text().replace(room_map.with_suffix(".pgm").name, "room.pgm")
+    )
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    report = tmp_path / "report.json"
+    cli = start("drake_sim.mapping", "--headless", "--out", out, "--report", report)
+    cli.wait_for("mapping headless (Ctrl-C stops)")
+    _stopped_with(cli, signal.SIGINT, "the run ended early (stopped)")
+    for name, data in before.items():
+        assert (tmp_path / name).read_bytes() == data, name  # byte for byte
+    assert (tmp_path / "room.partial.yaml").is_file() and (tmp_path / "room.partial.pgm").is_file()
+    assert json.loads(report.read_text())["end"] == "stopped"
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
+
+
+def test_navigate_headless_stopped_is_a_success_with_its_summary(start, tmp_path, room_map):
+    report = tmp_path / "report.json"
+    cli = start("drake_sim.navigate", "--map", room_map, "--headless", "--report", report)
+    cli.wait_for("navigating headless (Ctrl-C stops)")
+    code = cli.stop(signal.SIGINT)
+    stderr = cli.process.stderr.read()
+    assert code == 0, stderr
+    assert stderr == ""  # a stop is not a failure
+    assert any("ended by stopped" in line for line in cli.seen), cli.seen
+    assert json.loads(report.read_text())["end"] == "stopped"
+
+
+@pytest.mark.parametrize(
+    "module, summary",
+    [("drake_sim.walle", "both on oval.yaml: ended by stopped"), ("drake_sim.flip", "flips ")],
+)
+def test_headless_runs_stop_with_their_summary(start, tmp_path, module, summary):
+    report = tmp_path / "report.json"
+    cli = start(module, "--headless", "--duration", "600", "--report", report)
+    cli.wait_for("running headless (Ctrl-C stops)")
+    _stopped_with(cli, signal.SIGTERM, summary)
+    assert json.loads(report.read_text())["end"] == "stopped"
+
+
+def test_pickplace_stopped_during_the_task_reports_the_steps_done(start, tmp_path):
+    report = tmp_path / "report.json"
+    cli = start("drake_sim.pickplace", "--headless", "--mode", "kinematic", "--report", report)
+    cli.wait_for("] check ")
+    _stopped_with(cli, signal.SIGINT, "stopped: ")
+    data = json.loads(report.read_text())
+    assert data["end"] == "stopped" and not data["success"]
+    assert data["steps"][0]["name"] == "check"
+
+
+def test_a_first_compile_stops_at_once(start, tmp_path):
+    """The planner's kernels compiled in the foreground into an empty cache (``wait`` mode):
+    a stop in the middle of the compile ends the run with code 0."""
+    import os
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "DRAKE_SIM_KERNELS": "wait"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "drake_sim.pickplace", "--headless", "--mode", "kinematic"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        line = process.stderr.readline()  # the first: the compile's note
+        assert "compiling" in line, line
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=STOP_TIMEOUT)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 0, err
+    assert "stopped" in out
+    assert "Traceback" not in err

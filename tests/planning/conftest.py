@@ -4,6 +4,7 @@ import pytest
 from pydrake.math import RigidTransform
 
 from planning import PlanningScene
+from tests.mbm_helpers import mbm_problems
 
 
 @pytest.fixture(scope="module")
@@ -16,3 +17,11 @@ def wall_scene():
         "wall", [0.1, 0.1, 0.3], RigidTransform(scene.attachment_pose(ready).translation())
     )
     return scene
+
+
+@pytest.fixture(scope="session")
+def mbm_folder():
+    """The unpacked MotionBenchMaker Panda problems folder (``tests/mbm_helpers.py``: the copy
+    in ``shared/`` when present, else the library's finder); the test skips, saying why, when
+    they cannot be had."""
+    return mbm_problems()

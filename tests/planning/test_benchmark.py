@@ -1,7 +1,9 @@
-"""python -m planning.benchmark: one MBM problem end to end, the report rows, bad input."""
+"""python -m planning.benchmark: one MBM problem end to end, the report rows, where the problems
+come from (pip mocked), bad input."""
 
+import hashlib
 import json
-from pathlib import Path
+import subprocess
 
 import numpy as np
 import pytest
@@ -9,13 +11,21 @@ import pytest
 import planning.benchmark as mut
 from planning import PlanningScene
 from planning.io import mbm
+from tests.mbm_helpers import FakePip, make_problems_archive, make_sdist
 
-DATASET = mbm.default_dataset()  # the repository's copy: benchmarks/data/mbm_panda
+
+@pytest.fixture
+def fresh(tmp_path, monkeypatch):
+    """An empty cache of its own and no $DRAKE_SIM_MBM."""
+    monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv(mbm.ENV_VAR, raising=False)
+    return tmp_path / "cache"
 
 
-def test_one_problem_report(tmp_path, capsys):
+def test_one_problem_report(tmp_path, capsys, monkeypatch, mbm_folder):
     report = tmp_path / "report.json"
-    # No --dataset: the repository's own copy is the default.
+    # No --dataset: the problems come from $DRAKE_SIM_MBM.
+    monkeypatch.setenv(mbm.ENV_VAR, str(mbm_folder))
     code = mut.main(
         [
             "--families",
@@ -47,7 +57,7 @@ def test_one_problem_report(tmp_path, capsys):
     assert path.shape[1] == 7
     assert row["path_length"] == pytest.approx(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
     # The path can be re-checked by anyone: check it here with the scene's own queries.
-    folder = mut.problems_folder(DATASET)
+    folder = mbm_folder
     scene = PlanningScene()
     scene.load_moveit(folder / "box_panda/scene0001.yaml")
     request = mbm.load_request(folder / "box_panda/request0001.yaml")
@@ -60,25 +70,57 @@ def test_one_problem_report(tmp_path, capsys):
     assert "box_panda" in capsys.readouterr().out
 
 
-def test_dataset_may_be_the_archive_its_folder_or_the_problems(tmp_path):
-    archive = DATASET / "problems.tar.bz2"
-    assert DATASET.is_relative_to(Path(mut.__file__).resolve().parents[1])  # inside the checkout
-    folder = mut.problems_folder(DATASET)
+def test_dataset_may_be_the_archive_its_folder_or_the_problems(tmp_path, fresh):
+    archive = make_problems_archive(tmp_path / "set" / "problems.tar.bz2", ["box_panda"])
+    folder = mut._parse_args(["--dataset", str(archive), "--families", "box_panda"]).dataset
     assert (folder / "box_panda" / "scene0001.yaml").is_file()
-    assert mut.problems_folder(archive) == folder
-    assert mut.problems_folder(folder) == folder
-    assert mut.problems_folder(folder.parent) == folder
-    with pytest.raises(FileNotFoundError):
-        mut.problems_folder(tmp_path)
+    assert folder.is_relative_to(fresh)  # unpacked into the cache, not beside the archive
+    for given in (archive.parent, folder):
+        assert mut._parse_args(["--dataset", str(given), "--families", "box_panda"]).dataset == (
+            folder
+        )
 
 
-def test_default_dataset_missing_exits_2(monkeypatch, capsys):
-    def missing():
-        raise FileNotFoundError("MBM problems not found")
+def test_without_dataset_the_problems_are_downloaded_once_then_cached(
+    tmp_path, fresh, monkeypatch, capsys
+):
+    archive = make_problems_archive(tmp_path / "src" / "problems.tar.bz2", ["box_panda"])
+    monkeypatch.setitem(
+        mbm.ARCHIVE_SHA256, "panda", hashlib.sha256(archive.read_bytes()).hexdigest()
+    )
+    pip = FakePip(make_sdist(tmp_path / "sdist", {"panda": archive.read_bytes()}).read_bytes())
+    monkeypatch.setattr(subprocess, "run", pip)
+    args = mut._parse_args(["--families", "box_panda", "--limit", "1"])
+    assert args.dataset == fresh / "mbm" / "panda"
+    assert capsys.readouterr().err.startswith("note: downloading the MotionBenchMaker panda")
+    assert mut._parse_args(["--families", "box_panda"]).dataset == args.dataset
+    assert len(pip.commands) == 1 and capsys.readouterr().err == ""
 
-    monkeypatch.setattr(mut.mbm, "default_dataset", missing)
+
+def one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    return err
+
+
+def test_problems_that_cannot_be_had_exit_2_with_one_line(tmp_path, fresh, monkeypatch, capsys):
+    stderr = "ERROR: Could not find a version that satisfies the requirement vamp-planner==0.6.4\n"
+    monkeypatch.setattr(subprocess, "run", FakePip(returncode=1, stderr=stderr))
     assert mut.main(["--limit", "1"]) == 2
-    assert "MBM problems not found" in capsys.readouterr().err
+    note, err = capsys.readouterr().err.splitlines()  # the note on the download, the error
+    assert note.startswith("note: downloading") and err.startswith("error: cannot download")
+    assert "Could not find a version" in err and "--dataset" in err
+    assert not (fresh / "mbm" / "panda").exists()
+    corrupt = tmp_path / "problems.tar.bz2"
+    corrupt.write_bytes(b"BZh9 not really")
+    assert mut.main(["--dataset", str(corrupt)]) == 2
+    assert "not a readable problems.tar.bz2" in one_error_line(capsys)
+    monkeypatch.setenv(mbm.ENV_VAR, str(tmp_path / "nowhere"))
+    assert mut.main(["--limit", "1"]) == 2
+    assert f"error: {mbm.ENV_VAR}: " in one_error_line(capsys)
+    given = make_problems_archive(tmp_path / "set" / "problems.tar.bz2", ["box_panda"])
+    assert mut.main(["--dataset", str(given), "--families", "cage_panda"]) == 2
+    assert "no MBM family cage_panda" in one_error_line(capsys)
 
 
 def test_bad_arguments_exit_2(capsys):
@@ -151,8 +193,9 @@ def test_progress_falls_back_to_plain_lines(monkeypatch, capsys):
     assert "one line" in capsys.readouterr().out
 
 
-def test_profile_prints_the_breakdown(capsys):
-    assert mut.main(["--families", "cage_panda", "--limit", "2", "--profile"]) == 0
+def test_profile_prints_the_breakdown(capsys, mbm_folder):
+    profile = ["--families", "cage_panda", "--limit", "2", "--profile"]
+    assert mut.main(["--dataset", str(mbm_folder), *profile]) == 0
     out = capsys.readouterr().out
     assert "profile over 2 requests" in out and "tail only" in out
     assert "compiled: fine check on spheres" in out and "checks per request" in out

@@ -1,6 +1,6 @@
 """MotionPlanningInterface on the Panda station, in simulated time: blocking and asynchronous
 use, failures that leave the robot still, cancellation, superseded and overdue actions, closing
-(the property and abuse tests of issue #14: test_interface_robustness.py)."""
+(the property and abuse tests: test_interface_robustness.py)."""
 
 import threading
 import time
@@ -178,7 +178,7 @@ def test_gripper_move_can_be_cancelled(dut):
     assert dut.read_state()[7] == pytest.approx(result.finger_position, abs=1e-6)
 
 
-# ------------------------------------------------------- issue #14: never hangs or dies ----
+# ---------------------------------------------------------------- never hangs or dies ----
 def test_plan_async_accepts_a_planning_timeout(dut):
     handle = dut.plan_async(dut.planner.plan_to_pose, X_TARGET, timeout=30.0)
     result = handle.result(timeout=60.0)

@@ -1,4 +1,4 @@
-"""MotionPlanningInterface never hangs or dies (issue #14): any float given as a duration, a
+"""MotionPlanningInterface never hangs or dies: any float given as a duration, a
 timeout or a finger position either works within a bounded simulated time or raises
 ValueError / PlanningError, and the station keeps working afterwards.
 

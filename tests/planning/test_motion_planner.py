@@ -238,3 +238,18 @@ def test_kto_refinement_keeps_a_valid_path(scene):
     result = dut.plan_to_joints(q_b, q_start=q_a)
     assert result.trajectory.info["planner"].startswith("rrt_connect")
     assert_fine_collision_free(scene, result.trajectory.waypoints)
+
+
+@pytest.mark.parametrize("timeout", [float("nan"), float("inf"), 0.0, -1.0])
+def test_a_timeout_that_is_not_finite_seconds_is_an_invalid_request(dut, scene, timeout):
+    ready = scene.model.named_configurations["ready"]
+    requests = [
+        lambda: dut.plan_to_joints(ready, timeout=timeout),
+        lambda: dut.plan_path(ready, ready, timeout=timeout),
+        lambda: dut.plan_to_pose(scene.attachment_pose(ready), timeout=timeout),
+    ]
+    for request in requests:
+        with pytest.raises(PlanningError) as raised:
+            request()
+        assert raised.value.code is ErrorCode.INVALID_MOTION_PLAN  # not "found no path"
+        assert "timeout" in raised.value.message

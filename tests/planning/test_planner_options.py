@@ -12,7 +12,7 @@ from pydrake.common.yaml import yaml_load_typed
 
 import planning.planner_options as mut
 from drake_sim.base.errors import ConfigError
-from planning import PlanningScene
+from planning import ErrorCode, PlanningError, PlanningScene
 from planning.motion_planner import MotionPlanner
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
@@ -166,10 +166,40 @@ def test_each_section_check_names_the_field(section, field, value):
         mut.MotionPlannerOptions(**{section: bad}).check()
 
 
-@pytest.mark.parametrize("field, value", [("timeout", 0.0), ("seed", -1), ("seed", 1.5)])
+BAD_TIMEOUTS = [0.0, -1.0, float("nan"), float("inf"), -float("inf"), True, "5"]
+
+
+@pytest.mark.parametrize(
+    "field, value",
+    [*(("timeout", t) for t in BAD_TIMEOUTS), ("seed", -1), ("seed", 1.5)],
+)
 def test_top_level_check_names_the_field(field, value):
     with pytest.raises(ValueError, match=rf"^{field} must be"):
         mut.MotionPlannerOptions(**{field: value}).check()
+
+
+def test_a_timeout_that_is_not_finite_seconds_is_refused_when_the_planner_is_made():
+    """Before the planner compiles or searches anything (the check comes first)."""
+    with pytest.raises(ValueError, match=r"^timeout must be a finite number of seconds > 0"):
+        MotionPlanner(None, mut.MotionPlannerOptions(timeout=float("nan")))
+
+
+@pytest.mark.parametrize("timeout", BAD_TIMEOUTS)
+def test_request_timeout_refuses_what_is_not_finite_seconds(timeout):
+    with pytest.raises(PlanningError) as info:
+        mut.request_timeout(timeout, 5.0)
+    assert info.value.code is ErrorCode.INVALID_MOTION_PLAN
+    assert info.value.message == (
+        f"invalid request: timeout must be a finite number of seconds > 0, got {timeout!r}"
+    )
+
+
+def test_request_timeout_takes_the_options_when_none():
+    assert mut.request_timeout(None, 5.0) == 5.0
+    assert mut.request_timeout(0.25, 5.0) == 0.25
+    assert mut.request_timeout(2, 5.0) == 2.0 and isinstance(mut.request_timeout(2, 5.0), float)
+    with pytest.raises(PlanningError, match=r"options\.timeout must be .*, got nan"):
+        mut.request_timeout(None, float("nan"))  # options changed after the check
 
 
 def test_replace_keeps_working_on_top_level_fields():

@@ -3,6 +3,7 @@ line and exit code 2 (Ctrl-C and SIGTERM into 0), the argparse types reject bad 
 paths, and ``write_replay`` writes Meshcat's scene as HTML."""
 
 import argparse
+import logging
 import os
 import signal
 import subprocess
@@ -100,12 +101,15 @@ def test_run_usage_error_is_bad_input(capsys):
     assert len(lines) == 1 and lines[0].startswith("error: tool: argument --seed: must be >= 0")
 
 
-def test_run_ends_quietly_on_ctrl_c(capsys):
+STOPPED_IN_SETUP = ("stopped before the run began (while it was being set up)\n", "")
+
+
+def test_run_ends_with_one_line_on_ctrl_c_that_main_lets_through(capsys):
     def main(argv):
         raise KeyboardInterrupt
 
     assert mut.run(main) == mut.EXIT_OK == 0
-    assert capsys.readouterr() == ("", "")
+    assert capsys.readouterr() == STOPPED_IN_SETUP
 
 
 def _wrapped_interrupt(argv):
@@ -120,7 +124,7 @@ def _wrapped_interrupt(argv):
 
 def test_run_ends_quietly_on_an_interrupt_wrapped_by_compiled_code(capsys):
     assert mut.run(_wrapped_interrupt) == mut.EXIT_OK
-    assert capsys.readouterr() == ("", "")
+    assert capsys.readouterr() == STOPPED_IN_SETUP
     with pytest.raises(SystemError) as raised:
         _wrapped_interrupt(None)
     assert mut.is_stop(raised.value) and mut.is_stop(KeyboardInterrupt())
@@ -140,7 +144,7 @@ def _swallowed_interrupt(argv):
 
 def test_run_ends_quietly_on_any_error_raised_after_a_stop_signal(capsys):
     assert mut.run(_swallowed_interrupt) == mut.EXIT_OK
-    assert capsys.readouterr() == ("", "")
+    assert capsys.readouterr() == STOPPED_IN_SETUP
     assert not mut.stop_received()  # the handler is gone with its block
 
 
@@ -368,3 +372,60 @@ def test_every_entry_point_checks_its_paths_first(tmp_path, module, args, needle
     )
     assert_bad_input(result, needle)
     assert result.stdout == ""
+
+
+# A main that swallows the interrupt (as compiled code may) and goes on working.
+_DEAF_MAIN = """
+import sys, time
+from drake_sim.base import cli
+def main(argv):
+    end = time.monotonic() + 60
+    while True:
+        try:
+            print("working", flush=True)
+            while time.monotonic() < end:
+                time.sleep(0.01)
+            return 1
+        except KeyboardInterrupt:
+            pass  # swallowed: the run never notices its stop
+sys.exit(cli.run(main))
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_stop_the_run_swallows_still_ends_the_process_with_0(signum):
+    process = subprocess.Popen(
+        [sys.executable, "-c", _DEAF_MAIN],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert process.stdout.readline() == "working\n"
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=30)  # a bound on a hang, not a speed assertion
+    assert process.returncode == 0, err
+    assert out.strip().splitlines()[-1] == "stopped"
+    assert "Traceback" not in err
+
+
+def test_a_second_signal_ends_the_process_at_once():
+    code = _DEAF_MAIN.replace(
+        "from drake_sim.base import cli", "from drake_sim.base import cli\ncli.STOP_GRACE_S = 600"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert process.stdout.readline() == "working\n"
+    process.send_signal(signal.SIGINT)
+    time.sleep(0.5)
+    assert process.poll() is None  # the first waits for its grace time (600 s here)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=30)
+    assert process.returncode == 0, err
+    assert out.strip().splitlines()[-1] == "stopped (SIGINT again)"
+
+
+def test_run_keeps_drakes_info_lines_off_stderr():
+    logging.getLogger("drake").setLevel(logging.INFO)
+    assert mut.run(lambda argv: 0) == 0
+    assert logging.getLogger("drake").level == logging.WARNING  # stderr is for errors

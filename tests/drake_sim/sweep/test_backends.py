@@ -58,3 +58,6 @@ def test_ray_not_installed(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)  # import fails
     with pytest.raises(ConfigError, match=r"Ray is not installed \(pip install 'ray>=2.30'"):
         mut.make_backend("ray", workers=1)
+    with pytest.raises(ConfigError, match="--backend ray: Ray is not installed"):
+        mut.check_backend("ray")
+    mut.check_backend("local")  # needs nothing more

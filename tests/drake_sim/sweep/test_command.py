@@ -70,6 +70,21 @@ def test_bad_command_lines(tmp_path, capsys, argv, needle):
     assert not (tmp_path / "o").exists()  # nothing written on bad input
 
 
+def test_ray_not_installed_fails_before_the_plan_and_the_table(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails
+    out = tmp_path / "o"
+    assert sweep([tiny_flip(tmp_path), "--backend", "ray", "--out", out]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # no run plan
+    assert captured.err.count("\n") == 1 and "--backend ray: Ray is not installed" in captured.err
+    assert not out.exists()  # no results.csv, no sweep.json
+    out.mkdir()
+    (out / TABLE_FILE).write_text("kept\n")
+    assert sweep([tiny_flip(tmp_path), "--backend", "ray", "--out", out, "--resume"]) == 2
+    assert (out / TABLE_FILE).read_text() == "kept\n"
+    assert sorted(p.name for p in out.iterdir()) == [TABLE_FILE]
+
+
 def test_tiny_sweep_limit_then_resume(tmp_path, capsys):
     path, out = tiny_flip(tmp_path, repeats=2), tmp_path / "out"
     assert sweep([path, "--workers", "2", "--out", out, "--limit", "2"]) == 0
@@ -87,9 +102,10 @@ def test_tiny_sweep_limit_then_resume(tmp_path, capsys):
     second = rows_of(out)
     assert [r["index"] for r in second] == [0, 1, 2, 3]
     assert second[:2] == first  # not recomputed: same wall times, same workers
+    complete = (out / TABLE_FILE).read_bytes()
     assert sweep([path, "--out", out, "--resume"]) == 0  # nothing left to run
     assert "0 of 4 rollouts to run" in capsys.readouterr().out
-    assert rows_of(out) == second
+    assert (out / TABLE_FILE).read_bytes() == complete
     assert (out / "summary.json").is_file() and (out / "sweep.json").is_file()
 
 

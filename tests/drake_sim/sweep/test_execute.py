@@ -62,10 +62,71 @@ def test_a_stop_keeps_the_rows_written(tmp_path):
     assert [r["index"] for r in read_rows(tmp_path / TABLE_FILE)[1]] == [0, 1, 2]
 
 
+class RaisingBackend:
+    """Its runner is stopped (Ctrl-C) before any row arrives, or after ``n`` rows."""
+
+    def __init__(self, n=0):
+        self.n = n
+
+    def run(self, job, plain):
+        for item in plain[: self.n]:
+            yield result(item["index"])
+        raise KeyboardInterrupt
+
+    def stop(self):
+        return []
+
+
+def test_a_stopped_resume_leaves_a_complete_table_byte_for_byte(tmp_path):
+    spec = load_sweep(tiny_flip(tmp_path, repeats=2))
+    path = tmp_path / TABLE_FILE
+    every = rollouts(spec)
+    table = Table(path, mut.header(spec), resume=False)
+    assert mut.execute(spec, make_job(spec), every, table, ListBackend())
+    complete = path.read_bytes()
+    # The table is complete: a later run stopped before any row leaves it as it was.
+    table = Table(path, mut.header(spec), resume=True)
+    assert not mut.execute(spec, make_job(spec), every, table, RaisingBackend())
+    table.close()
+    assert path.read_bytes() == complete
+    # A resumed run of a part of the sweep, stopped after one row: the old rows are kept as
+    # they were, the new one after them.
+    lines = complete.splitlines(keepends=True)
+    path.write_bytes(b"".join(lines[:2]))  # the header and the first row
+    kept = path.read_bytes()
+    table = Table(path, mut.header(spec), resume=True)
+    todo = [r for r in every if r.index not in table.done]
+    assert not mut.execute(spec, make_job(spec), todo, table, RaisingBackend(1))
+    assert path.read_bytes().startswith(kept)
+    assert len(read_rows(path)[1]) == 2
+
+
+class SlowSaveTable(Table):
+    """A table whose save is cut by Ctrl-C once, as a stop in the middle of writing would."""
+
+    cut = True
+
+    def append(self, row):
+        if self.cut:
+            self.cut = False
+            raise KeyboardInterrupt
+        super().append(row)
+
+
+def test_a_stop_while_saving_keeps_the_row(tmp_path):
+    spec = load_sweep(tiny_flip(tmp_path, repeats=2))
+    table = SlowSaveTable(tmp_path / TABLE_FILE, mut.header(spec), resume=False)
+    assert not mut.execute(spec, make_job(spec), rollouts(spec), table, ListBackend())
+    assert [r["index"] for r in read_rows(tmp_path / TABLE_FILE)[1]] == [3]
+
+
 class ListBackend:
     def run(self, job, plain):
         for item in reversed(plain):  # any order
             yield result(item["index"])
+
+    def stop(self):
+        return []
 
 
 def test_execute_writes_every_row(tmp_path):

@@ -2,6 +2,7 @@ import dataclasses as dc
 
 import pytest
 
+from drake_sim.base import config
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.ddrive import default_robot_file
 from drake_sim.sweep import runners as mut
@@ -11,7 +12,7 @@ from tests.drake_sim.sweep.sweep_files import tiny_flip, write_sweep
 
 @dc.dataclass
 class Inner:
-    position: list = dc.field(default_factory=lambda: [1.0, 2.0, 3.0])
+    position: list[float] = dc.field(default_factory=lambda: [1.0, 2.0, 3.0])
     mass: float = 0.5
 
 
@@ -19,6 +20,8 @@ class Inner:
 class Outer:
     inner: Inner = dc.field(default_factory=Inner)
     rate: float = 10.0
+    grid: list[list[float]] = dc.field(default_factory=lambda: [[1.0, 2.0], [3.0, 4.0]])
+    items: list[Inner] = dc.field(default_factory=lambda: [Inner(mass=1.5)])
 
 
 def test_resolve():
@@ -26,6 +29,9 @@ def test_resolve():
     assert mut.resolve(dut, "rate", "w") == 10.0
     assert mut.resolve(dut, "inner.mass", "w") == 0.5
     assert mut.resolve(dut, "inner.position[2]", "w") == 3.0
+    assert mut.resolve(dut, "grid[1][0]", "w") == 3.0
+    assert mut.resolve(dut, "items[0].position[1]", "w") == 2.0
+    assert mut.resolve(dut, "items[0].mass", "w") == 1.5
     with pytest.raises(ConfigError, match=r"w: unknown parameter path 'inner.bogus'.*mass"):
         mut.resolve(dut, "inner.bogus", "w")
     with pytest.raises(ConfigError, match="inner.position has no item 3"):
@@ -34,13 +40,22 @@ def test_resolve():
         mut.resolve(dut, "inner", "w")
     with pytest.raises(ConfigError, match="unknown parameter path 'rate.x'"):
         mut.resolve(dut, "rate.x", "w")
+    with pytest.raises(ConfigError, match=r"grid\[1\] has no item 2"):
+        mut.resolve(dut, "grid[1][2]", "w")
+    with pytest.raises(ConfigError, match="rate has no item 0"):
+        mut.resolve(dut, "rate[0]", "w")
+    with pytest.raises(ConfigError, match="is a section, not a value"):
+        mut.resolve(dut, "items[0]", "w")
+    with pytest.raises(ConfigError, match=r"w: parameter path: malformed key 'grid\[-1\]'"):
+        mut.resolve(dut, "grid[-1]", "w")
 
 
 def test_override_strings():
-    dut = mut.override_strings(
-        Outer(), {"rate": 5, "inner.position[0]": 9.5, "inner.position[2]": -1.0, "m": "physics"}
-    )
-    assert dut == ["rate=5", 'm="physics"', "inner.position=[9.5, 2.0, -1.0]"]
+    overrides = {"rate": 5, "inner.position[0]": 9.5, "inner.position[2]": -1.0, "m": "physics"}
+    dut = mut.override_strings(overrides)
+    assert dut == ["rate=5", "inner.position[0]=9.5", "inner.position[2]=-1.0", 'm="physics"']
+    overridden = config.apply_overrides(Outer, Outer(), dut[:3])
+    assert overridden == Outer(rate=5.0, inner=Inner(position=[9.5, 2.0, -1.0]))
 
 
 def job_of(tmp_path, text):
@@ -112,8 +127,14 @@ def test_a_failing_rollout_is_a_row_with_its_reason(tmp_path):
 def test_pickplace_rollout_moves_the_object(tmp_path):
     job = job_of(tmp_path, "runner: pickplace\n")
     runner = mut.get_runner("pickplace")
-    moved = runner.load(job["scenario"], {"scene.object.position[1]": -0.3, "mode": "kinematic"}, 5)
-    assert moved.scene.object.position[1] == -0.3
+    default = runner.load(job["scenario"], {}, 5)
+    overrides = {
+        "scene.object.position[1]": -0.3,
+        "mode": "kinematic",
+        "scene.object.position[0]": 0.55,
+    }
+    moved = runner.load(job["scenario"], overrides, 5)
+    assert moved.scene.object.position == [0.55, -0.3, default.scene.object.position[2]]
     assert moved.mode == "kinematic"
     assert moved.planner.seed == 5
 

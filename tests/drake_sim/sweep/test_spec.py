@@ -35,6 +35,13 @@ def test_fields(tmp_path):
     assert dut.size == 6
 
 
+def test_paths_are_set_keys_with_list_indices(tmp_path):
+    """Parameter paths are read like ``--set`` keys (``config.parse_key_path``)."""
+    text = BASE + "parameters: {'m[1][0]': {grid: [1]}, 'pushes[0].force[2]': {grid: [2]}}\n"
+    dut = load_text(tmp_path, text)
+    assert [p.path for p in dut.parameters] == ["m[1][0]", "pushes[0].force[2]"]
+
+
 def test_scenario_is_relative_to_the_sweep_file(tmp_path):
     dut = load_text(tmp_path, BASE + "scenario: sub/flip.yaml\n")
     assert dut.scenario == str((tmp_path / "sub" / "flip.yaml").resolve())
@@ -55,6 +62,10 @@ def test_scenario_is_relative_to_the_sweep_file(tmp_path):
         (BASE + "parameters: {a.b: {gaussian: [0, 1]}}\n", "unknown distribution 'gaussian'"),
         (BASE + "parameters: {a.b: {grid: [1], uniform: [0, 1]}}\n", "must be one of"),
         (BASE + "parameters: {'a..b': {grid: [1]}}\n", "not a dotted path"),
+        (BASE + "parameters: {'a[-1]': {grid: [1]}}\n", "negative index [-1]"),
+        (BASE + "parameters: {'a[0': {grid: [1]}}\n", "brackets out of place in 'a[0'"),
+        (BASE + "parameters: {'a=b': {grid: [1]}}\n", "'=' in 'a=b'"),
+        (BASE + "parameters: {3: {grid: [1]}}\n", "not a dotted path"),
         (BASE + "repeats: 0\n", "'repeats' must be an integer >= 1"),
         (BASE + "samples: 1.5\n", "'samples' must be an integer >= 1"),
         (BASE + "metrics: flips\n", "'metrics' must be a list"),

@@ -13,7 +13,6 @@ from planning.collision.checker import CheckerAdapter
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import OBJ_COLUMNS
 from planning.collision.spheres import UNKNOWN, _primitives
-from planning.io.mbm import default_dataset
 from planning.scene_objects import SceneObject
 
 CUBE = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
@@ -127,13 +126,12 @@ def near(scene, q, n, seed):
     return np.clip(q + spread, adapter.lower, adapter.upper)
 
 
-def test_never_proves_free_what_drake_finds_colliding_in_mbm_scenes(scene):
-    from planning.benchmark import _load, problems_folder
+def test_never_proves_free_what_drake_finds_colliding_in_mbm_scenes(scene, mbm_folder):
+    from planning.benchmark import _load
     from planning.io import mbm
 
-    folder = problems_folder(default_dataset())
     for family in ("cage_panda", "bookshelf_thin_panda", "table_under_pick_panda"):
-        problem = next(mbm.iter_problems(folder, [family], 1))
+        problem = next(mbm.iter_problems(mbm_folder, [family], 1))
         start, goal = _load(scene, problem)
         # About the ends, where the arm reaches among the objects.
         qs = np.vstack([near(scene, start, 300, 1), near(scene, goal, 300, 2)])

@@ -18,9 +18,6 @@ from planning import PlanningScene
 from planning.collision.checker import CheckerAdapter
 from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.collision.sphere_robot import shape_polytope
-from planning.io.mbm import default_dataset
-
-DATASET = default_dataset()  # the repository's copy: benchmarks/data/mbm_panda
 
 
 @pytest.fixture(scope="module")
@@ -81,13 +78,11 @@ def check_agreement(scene, qs):
     np.testing.assert_array_equal(SphereCheckerAdapter(scene).configs_free(qs), free)
 
 
-def test_agrees_with_drake_in_mbm_scenes(scene, dut):
-    from planning.benchmark import problems_folder
+def test_agrees_with_drake_in_mbm_scenes(scene, dut, mbm_folder):
     from planning.io import mbm
 
-    folder = problems_folder(DATASET)
     for family in ("cage_panda", "bookshelf_thin_panda"):
-        problem = next(mbm.iter_problems(folder, [family], 1))
+        problem = next(mbm.iter_problems(mbm_folder, [family], 1))
         scene.load_moveit(problem.scene_file)
         check_agreement(scene, random_q(scene, 1000, seed=2))
     scene.clear()

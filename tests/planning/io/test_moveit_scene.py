@@ -116,7 +116,7 @@ def test_allowed_collision_matrix_parsing(caplog, scene, write):
 
 
 def test_allowed_collisions_do_not_outlive_their_scene(scene, write):
-    """Issue #14: a scene allowing link 2 and link 5 to touch, then one that does not."""
+    """A scene allowing link 2 and link 5 to touch, then one that does not."""
     assert scene.colliding_pairs(SELF_COLLIDING) == [("panda_link2", "panda_link5")]
     acm = {"entry_names": ["panda_link2", "panda_link5"], "entry_values": [[0, 1], [1, 0]]}
     acm["entry_values"] = [[bool(v) for v in row] for row in acm["entry_values"]]
@@ -257,6 +257,29 @@ def test_files_that_are_not_scenes(scene, write, tmp_path):
     assert "malformed YAML" in load_error(scene, write("world: {collision_objects: ["))
     assert "no such scene file" in load_error(scene, tmp_path / "nowhere.yml")
     assert "not a MoveIt scene file" in load_error(scene, write(SCENE, "scene.txt"))
+
+
+@pytest.mark.parametrize("text", ["", "  \n\n", "# nothing here\n", "---\n", "null\n"])
+def test_an_empty_file_is_an_invalid_scene(scene, write, text):
+    message = load_error(scene, write(text))
+    assert "empty scene file" in message
+
+
+def test_a_scene_without_name_or_objects_loads_empty_with_one_warning(caplog, scene, write):
+    with caplog.at_level(logging.WARNING, logger=mut.__name__):
+        mut.load_moveit_scene(scene, write("{}\n"))
+    assert scene.world_objects == {}
+    warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1
+    assert "no name and no objects" in warnings[0].getMessage()
+    assert "scene.yaml" in warnings[0].getMessage()
+    restore(scene)
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger=mut.__name__):
+        mut.load_moveit_scene(scene, write("name: cleared\nworld: {collision_objects: []}\n"))
+        mut.load_moveit_scene(scene, write(scene_text(box("b"))))  # objects, no name
+    assert list(scene.world_objects) == ["b"]
+    assert caplog.records == []  # an explicitly empty scene, or a nameless one with objects
 
 
 def test_the_extension_picks_the_reader(scene, write):

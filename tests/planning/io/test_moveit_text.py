@@ -70,7 +70,8 @@ def test_an_object_named_again_replaces_the_first():
     text += "* a\n1\nbox 1 1 1\n1 1 1\n0 0 0 1\n0 0 0 0\n."
     (only,) = mut.parse_scene_text(text)
     assert only.name == "a" and only.shape == "box"
-    assert mut.parse_scene_text("empty scene\n.\n") == []
+    assert mut.parse_scene_text("empty scene\n.\n") == []  # a name and '.': valid, empty
+    assert mut.parse_scene_text("\n.\n") == []  # MoveIt's name may be empty, its line not
     assert mut.parse_scene_text("s\n* none\n0\n.") == []  # no shapes: nothing
 
 
@@ -80,7 +81,10 @@ SPHERE = "sphere\n0.1\n0 0 0\n0 0 0 1\n0 0 0 0\n"
 @pytest.mark.parametrize(
     "text, needle",
     [
-        ("", "empty file"),
+        ("", ": empty scene file (expected the scene name on line 1"),
+        (" \n\t\n\n", ": empty scene file"),
+        (".\n", ":1: expected the scene name, got '.'"),
+        ("* a\n1\n" + SPHERE + ".", ":1: expected the scene name, got '* a'"),
         ("s\n", "end of the file (no '.' at the end?)"),
         ("s\n* a\n1\n" + SPHERE, ":8: expected '*' (an object) or '.'"),
         ("s\nbox\n.", ":2: expected '*' (an object) or '.' (the end), got 'box'"),
@@ -119,6 +123,18 @@ def test_errors_name_the_line_and_what_was_expected(text, needle):
     with pytest.raises(ValueError) as info:
         mut.parse_scene_text(text, "my.scene")
     assert str(info.value).startswith("my.scene") and needle in str(info.value)
+
+
+def test_an_empty_file_is_an_invalid_scene(table_scene, write):
+    for text in ("", "\n  \n"):
+        path = write(text, "empty.scene")
+        with pytest.raises(PlanningError) as info:
+            table_scene.load_moveit(path)
+        assert info.value.code == ErrorCode.INVALID_SCENE
+        assert info.value.message.startswith(f"{path}: empty scene file")
+        assert list(table_scene.world_objects) == ["table"]
+    table_scene.load_moveit(write("(noname)+\n.\n", "nothing.scene"))
+    assert table_scene.world_objects == {}  # an explicitly empty scene replaces the table
 
 
 def test_a_bad_file_is_an_invalid_scene(table_scene, write):

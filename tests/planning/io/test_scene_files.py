@@ -148,6 +148,21 @@ def test_missing_and_non_utf8_files_are_an_invalid_scene(scene, write, tmp_path)
             assert needle in info.value.message and str(path) in info.value.message
 
 
+@pytest.mark.parametrize("text", ["", " \n\n", "# a comment\n"])
+def test_an_empty_file_is_an_invalid_scene(scene, write, text):
+    path = write(text)
+    with pytest.raises(PlanningError) as info:
+        mut.load_scene_yaml(scene, path)
+    assert info.value.code == ErrorCode.INVALID_SCENE
+    assert info.value.message.startswith(f"{path}: empty scene file")
+    assert list(scene.world_objects) == ["table"]
+
+
+def test_an_explicitly_empty_scene_loads(scene, write):
+    mut.load_scene_yaml(scene, write("{}\n"))
+    assert scene.world_objects == {} and scene.place_position is None
+
+
 def test_loading_replaces_the_whole_scene(scene, write):
     """Held objects and allowed collisions of the scene before are gone too."""
     scene.attach_new(SceneObject("held", "sphere", (0.02,), RigidTransform([0, 0, 0.1])))

@@ -19,8 +19,9 @@ import numpy as np
 import pytest
 
 from planning import MotionPlanner, PlanningScene
-from planning.benchmark import _load, problems_folder
+from planning.benchmark import _load
 from planning.io import mbm
+from tests.mbm_helpers import find_mbm_problems
 
 RECORDED = Path(__file__).parent / "data" / "mbm_paths.json"
 
@@ -46,9 +47,9 @@ def test_the_recorded_requests_cover_every_family_with_searched_paths():
     assert all(r["how"] != "straight" and len(r["path"]) > 2 for r in recorded)
 
 
-def test_each_recorded_request_gives_the_recorded_path_to_the_bit(planner_and_scene):
+def test_each_recorded_request_gives_the_recorded_path_to_the_bit(planner_and_scene, mbm_folder):
     planner, scene = planner_and_scene
-    problems = _problems(problems_folder(mbm.default_dataset()))
+    problems = _problems(mbm_folder)
     for row in json.loads(RECORDED.read_text()):
         path, how = _plan(planner, *_load(scene, problems[row["family"], row["problem"]]))
         expected = np.array(row["path"])
@@ -65,7 +66,7 @@ def record() -> None:
     scene = PlanningScene()
     planner = MotionPlanner(scene)
     rows, done = [], set()
-    for problem in _problems(problems_folder(mbm.default_dataset())).values():
+    for problem in _problems(find_mbm_problems()).values():
         if problem.family in done:
             continue
         q_start, q_goal = _load(scene, problem)
