@@ -7,7 +7,7 @@ import sys
 import pytest
 
 import drake_sim.flip as mut
-from tests.cli_helpers import assert_bad_input, edited_robot_file
+from tests.cli_helpers import assert_bad_input, edited_robot_file, run_module
 from tests.meshcat_html import scene_paths
 
 REPORT_KEYS = {
@@ -21,10 +21,14 @@ REPORT_KEYS = {
 }
 
 
-def _run(*args):
+def _run_process(*args):
     return subprocess.run(
         [sys.executable, "-m", "drake_sim.flip", *args], capture_output=True, text=True, timeout=600
     )
+
+
+def _run(*args):
+    return run_module("drake_sim.flip", *args)
 
 
 def test_headless_report_and_record(tmp_path):
@@ -168,7 +172,7 @@ def test_bad_scenario_file_exits_2(tmp_path, text):
 
 def test_runs_as_a_module_and_exits_0(tmp_path):
     out = tmp_path / "r.json"
-    result = _run(
+    result = _run_process(
         "--headless", "--duration", "0.5", "--set", "scene.world=''", "--report", str(out)
     )
     assert result.returncode == 0, result.stderr

@@ -2,8 +2,6 @@
 arena, route and goals files)."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 import yaml
@@ -12,7 +10,7 @@ import drake_sim.mapping as mut
 from drake_sim.base import cli
 from drake_sim.base.map_files import load_map
 from drake_sim.base.resources import config_dir
-from tests.cli_helpers import assert_bad_input
+from tests.cli_helpers import assert_bad_input, run_module
 
 REPORT_KEYS = {
     "map_iou",
@@ -57,13 +55,7 @@ def test_a_short_route_maps_saves_and_reports(tmp_path, capsys):
 
 
 def _run(*args, cwd=None):
-    return subprocess.run(
-        [sys.executable, "-m", "drake_sim.mapping", "--headless", *args],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        cwd=cwd,
-    )
+    return run_module("drake_sim.mapping", "--headless", *args, cwd=cwd)
 
 
 def _arena_file(tmp_path, edit):

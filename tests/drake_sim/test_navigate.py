@@ -1,15 +1,13 @@
 """``python -m drake_sim.navigate``: options, JSON report and exit codes (DESIGN.md)."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 import drake_sim.navigate as mut
 from drake_sim.base import cli
 from tests import navigation_helpers as nh
-from tests.cli_helpers import assert_bad_input
+from tests.cli_helpers import assert_bad_input, run_module
 
 REPORT_KEYS = {
     "goals",
@@ -59,12 +57,7 @@ def test_one_goal_is_reached_and_reported(room_map, tmp_path, capsys):
 
 
 def _run(*args):
-    return subprocess.run(
-        [sys.executable, "-m", "drake_sim.navigate", "--headless", *args],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    return run_module("drake_sim.navigate", "--headless", *args)
 
 
 def test_an_unreachable_goal_exits_1_and_says_which_and_why(room_map):
@@ -122,6 +115,11 @@ class _FakePanel:
 
 def test_goals_from_the_page_with_a_viewer(room_map, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(mut, "GoalPanel", _FakePanel)
+    # The page's goals are under test, not the pacing: simulate flat out.
+    flat_out = mut.NavigationRun
+    monkeypatch.setattr(
+        mut, "NavigationRun", lambda *a, **k: flat_out(*a, **{**k, "realtime": False})
+    )
     report_file = tmp_path / "report.json"
     args = ["--map", str(room_map), "--duration", "15", "--report", str(report_file)]
     assert cli.run(mut.main, args) == 0

@@ -1,22 +1,14 @@
 """``python -m drake_sim.view``: runs, records, and rejects bad input with exit code 2."""
 
-import subprocess
-import sys
-
 import pytest
 
 import drake_sim.view as mut
-from tests.cli_helpers import assert_bad_input, edited_robot_file
+from tests.cli_helpers import assert_bad_input, edited_robot_file, run_module
 from tests.meshcat_html import scene_paths
 
 
-def _run(*args, timeout=300):
-    return subprocess.run(
-        [sys.executable, "-m", "drake_sim.view", *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-    )
+def _run(*args):
+    return run_module("drake_sim.view", *args)
 
 
 def test_world_view_records_html(tmp_path):
