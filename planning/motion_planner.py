@@ -88,8 +88,9 @@ class MotionPlanner:
     def _kernels_now(self) -> bool:
         """Whether the compiled search can be had now: it is cached (or, in ``wait`` mode, has
         been built or waited for). Otherwise a background build has been started."""
-        if planner_kernels.mode() == "wait":
-            planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planner"))
+        if planner_kernels.mode() == "wait":  # progress on a terminal; logs stay clean
+            line = planner_kernels.ProgressLine("planner") if sys.stderr.isatty() else None
+            planner_kernels.wait_ready(progress=line)
             return True
         if planner_kernels.ready():
             return True

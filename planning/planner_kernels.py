@@ -123,18 +123,9 @@ def start_background() -> bool:
     if lock is None:
         return True
     try:
-        _write_status(
-            {
-                "state": "building",
-                "step": 0,
-                "steps": "?",
-                "name": "starting",
-                "started": time.time(),
-                "expected_s": _last_build_s(),
-            }
-        )
+        started = time.time()
         with open(state_dir() / "build.log", "ab") as log:
-            subprocess.Popen(
+            process = subprocess.Popen(
                 [
                     sys.executable,
                     "-m",
@@ -149,6 +140,10 @@ def start_background() -> bool:
                 start_new_session=True,
                 pass_fds=(lock.fileno(),),
             )
+        status = {"state": "building", "step": 0, "steps": "?", "name": "starting"}
+        _write_status(
+            {**status, "pid": process.pid, "started": started, "expected_s": _last_build_s()}
+        )
     finally:
         lock.close()  # the build process holds the lock through its own descriptor now
     return True

@@ -46,6 +46,8 @@ def test_a_background_build_is_started_once_and_handed_the_lock(state, monkeypat
     started = []
 
     class FakePopen:
+        pid = 4242
+
         def __init__(self, args, **kwargs):
             started.append((args, kwargs))
             assert mut.building()  # the lock is held while the build process starts
@@ -59,6 +61,7 @@ def test_a_background_build_is_started_once_and_handed_the_lock(state, monkeypat
     assert kwargs["pass_fds"] == (int(args[args.index("--lock-fd") + 1]),)
     assert kwargs["start_new_session"]  # Ctrl-C in the terminal does not stop it
     assert mut.read_status()["state"] == "building"
+    assert mut.read_status()["pid"] == FakePopen.pid  # whoever must end it can
 
     lock = mut._try_lock()  # a build already runs: no second one
     try:
