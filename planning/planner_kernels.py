@@ -34,6 +34,7 @@ import sys
 import time
 from pathlib import Path
 
+from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
 from planning.collision import sphere_batch, sphere_kernel
 from planning.collision.hull_kernel import prove_free_packed
@@ -62,11 +63,11 @@ def mode() -> str:
     """The mode ``DRAKE_SIM_KERNELS`` names (``background`` when unset).
 
     Raises:
-        ValueError: an unknown mode.
+        ConfigError: an unknown mode (bad input: one line and exit code 2 from a CLI).
     """
     value = os.environ.get(ENV_MODE, "").strip() or "background"
     if value not in MODES:
-        raise ValueError(f"{ENV_MODE}={value!r}: expected one of {', '.join(MODES)}")
+        raise ConfigError(f"{ENV_MODE}={value!r}: expected one of {', '.join(MODES)}")
     return value
 
 

@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from drake_sim.base.errors import ConfigError
 from planning import MotionPlanner, PlanningScene
 from planning import planner_kernels as mut
 
@@ -27,7 +28,7 @@ def test_the_mode_comes_from_the_environment(monkeypatch):
     monkeypatch.setenv(mut.ENV_MODE, "wait")
     assert mut.mode() == "wait"
     monkeypatch.setenv(mut.ENV_MODE, "sometimes")
-    with pytest.raises(ValueError, match="DRAKE_SIM_KERNELS='sometimes': expected one of"):
+    with pytest.raises(ConfigError, match="DRAKE_SIM_KERNELS='sometimes': expected one of"):
         mut.mode()
 
 
