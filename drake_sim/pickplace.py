@@ -15,7 +15,6 @@ the step and the reason), 2 on bad input.
 
 import dataclasses as dc
 import json
-import logging
 import sys
 import time
 
@@ -149,7 +148,6 @@ def _run_task(mpi, meshcat, scenario, args):
 
 def main(argv=None) -> int:
     args = _parse_args(argv)
-    logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors only
     scenario = load_scenario(args)
     if args.print_scenario:
         print(dump_pickplace_scenario(scenario), end="")

@@ -62,7 +62,6 @@ class MotionPlanner:
         self._options = options if options is not None else MotionPlannerOptions()
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
-        start = time.perf_counter()
         # Until the compiled search is in numba's cache, plan on Drake's checker while it is
         # built in the background (``planning.planner_kernels``), then switch to it.
         self._pending = self._options.spheres.enabled and not self._kernels_now()
@@ -82,8 +81,6 @@ class MotionPlanner:
         if self._pending:  # IK's steps come from the background build, compiled once
             planner_kernels.await_shared()
         self._state.ik_solver()  # made now rather than in the first pose request
-        self.setup_time_s = time.perf_counter() - start
-        """s of wall time the planner took to be made: compiling or loading its kernels."""
 
     def _kernels_now(self) -> bool:
         """Whether the compiled search can be had now: it is cached (or, in ``wait`` mode, has
@@ -92,9 +89,8 @@ class MotionPlanner:
             line = planner_kernels.ProgressLine("planner") if sys.stderr.isatty() else None
             planner_kernels.wait_ready(progress=line)
             return True
-        if planner_kernels.ready():
+        if not planner_kernels.start_background():  # False: the kernels are cached
             return True
-        planner_kernels.start_background()
         print(
             "note: the planner's kernels are compiling once for this machine in the background "
             f"({planner_kernels.describe(planner_kernels.read_status())}); until they are "

@@ -5,10 +5,6 @@ Every output a user keeps (maps, reports, sweep tables, replays, trajectories) i
 the temporary file is then renamed over the target (``os.replace``, atomic on POSIX and
 Windows within one file system). A run stopped at any moment, Ctrl-C included, leaves either the
 old file or the new one, never a truncated mix; the temporary file is removed on any error.
-
-``partial_path`` names the file beside a result where a run that was stopped early saves what it
-had (``maps/room.yaml`` -> ``maps/room.partial.yaml``), so a complete result is never replaced by
-a partial one.
 """
 
 from __future__ import annotations
@@ -99,16 +95,6 @@ def _signals_held():
             signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
         for signum in caught:
             signal.raise_signal(signum)
-
-
-def partial_path(path: Path | str) -> Path:
-    """The file beside ``path`` for a partial result: ``NAME.partial.EXT``
-    (``maps/room.yaml`` -> ``maps/room.partial.yaml``; a name without a suffix gets
-    ``.partial``)."""
-    path = Path(path)
-    if path.suffix:
-        return path.with_name(f"{path.stem}.partial{path.suffix}")
-    return path.with_name(f"{path.name}.partial")
 
 
 def _read_umask() -> int:

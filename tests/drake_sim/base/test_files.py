@@ -85,12 +85,3 @@ def test_a_signal_during_the_renames_waits_for_the_last_one():
         assert delivered == ["SIGINT"]  # delivered at the block's end
     finally:
         signal.signal(signal.SIGINT, previous)
-
-
-@pytest.mark.parametrize(
-    "name, partial",
-    [("maps/room.yaml", "maps/room.partial.yaml"), ("out/results.csv", "out/results.partial.csv")],
-)
-def test_partial_path_names_the_file_beside_the_result(name, partial):
-    assert str(mut.partial_path(name)) == partial
-    assert mut.partial_path("maps/room").name == "room.partial"
