@@ -36,9 +36,10 @@ from slam_benchmark import route_poses
 
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
+from drake_sim.base.planar import compose, wrap_angle
+from drake_sim.base.planar import relative_pose as relative
 from drake_sim.systems.estimation.amcl import default_amcl_config_file, load_amcl_config
-from drake_sim.systems.estimation.particle_filter import ParticleFilter, wrap
-from drake_sim.systems.estimation.scan_matching_slam import compose, relative
+from drake_sim.systems.estimation.particle_filter import ParticleFilter
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
 from drake_sim.worlds.footprints import cast_rays
 from drake_sim.worlds.route import default_route_file, load_route
@@ -103,7 +104,7 @@ class Scenario:
                     [
                         k / RATE,
                         math.dist(estimate[:2], pose[:2]),
-                        math.degrees(abs(float(wrap(estimate[2] - pose[2])))),
+                        math.degrees(abs(float(wrap_angle(estimate[2] - pose[2])))),
                     ]
                 )
         return costs, np.array(rows)

@@ -30,10 +30,10 @@ import numpy as np
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
+from drake_sim.navigation.costmap import LETHAL, Costmap, inflate
+from drake_sim.navigation.global_planner import GlobalPlannerConfig, plan_path
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena
 from drake_sim.worlds.footprints import Footprint, cast_rays, clearance
-from planning.mobile.costmap import LETHAL, Costmap, inflate
-from planning.mobile.global_planner import GlobalPlannerConfig, plan_path
 
 BEAMS, RANGE_MAX = 360, 3.5
 

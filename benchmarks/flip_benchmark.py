@@ -12,13 +12,9 @@ import os
 import platform
 import statistics
 
-from diagrams.flip_scenario import load_flip_scenario
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
-from drake_sim.base.resources import config_dir
-from drake_sim.flip_run import FlipRun
-from drake_sim.robots.ddrive import default_robot_file
-from drake_sim.robots.ddrive_params import load_robot_params
+from drake_sim.runs.flip import RECIPE
 
 COLUMNS = (
     ("flips", "flips", "{:.0f}"),
@@ -75,14 +71,12 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
     parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
-    scenario = load_flip_scenario(config_dir() / "flip.yaml")
-    robot = load_robot_params(default_robot_file())
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
     print(" ".join(f"{name:>12}" for name, _, _ in COLUMNS))
     rows = []
     for _ in range(args.runs):
-        run = FlipRun(scenario, robot)
-        run.advance_to(args.duration, progress=True)  # A bar on a terminal only.
+        run = RECIPE.start()  # config/flip.yaml, config/ddrive.yaml
+        run.run(args.duration, progress=True)  # A bar on a terminal only.
         row = run.report().to_dict()
         rows.append(row)
         print(" ".join(f"{fmt.format(row[key]):>12}" for _, key, fmt in COLUMNS))

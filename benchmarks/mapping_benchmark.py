@@ -25,14 +25,10 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from diagrams.mapping import make_mapping_diagram
-from diagrams.mapping_scenario import default_scenario_file, load_mapping_scenario
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
-from drake_sim.mapping_run import MappingReport, MappingRun
-from drake_sim.robots.turtlebot3 import default_turtlebot3_file
-from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.runs.mapping import RECIPE, MappingReport
 from drake_sim.worlds.arena import load_arena, shipped_arenas
-from drake_sim.worlds.route import default_route_file, load_route
 
 LIDAR_SCANS = 200
 """Scans timed per arena for the lidar's cost."""
@@ -122,8 +118,8 @@ def main() -> None:
     parser.add_argument("--arenas", nargs="*", help="arena names (default: every shipped one)")
     parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
-    scenario = load_mapping_scenario(default_scenario_file())
-    robot = load_turtlebot3_params(default_turtlebot3_file())
+    inputs = RECIPE.load()  # config/mapping_scenario.yaml, config/turtlebot3.yaml
+    scenario, robot = inputs.scenario, inputs.robot
     arenas = [p for p in shipped_arenas() if not args.arenas or p.stem in args.arenas]
     lidar = scenario.lidar
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
@@ -136,11 +132,10 @@ def main() -> None:
     print(header)
     summary, runs = [], []
     for path in arenas:
-        arena = load_arena(path)
-        waypoints = load_route(default_route_file(path), arena).waypoints
         factors, passed = [], True
         for seed in range(args.runs):
-            run = MappingRun(scenario, robot, arena, waypoints, seed=seed)
+            # The arena's default route; the map is not saved (``run``, not ``finish``).
+            run = RECIPE.start(overrides=[f"arena={json.dumps(str(path))}"], seed=seed)
             run.run(run.default_duration())
             r = run.report()
             ok = r.end == "route_done" and meets_acceptance(r)
@@ -155,9 +150,8 @@ def main() -> None:
                 f"{r.sim_time_s:7.1f} {r.real_time_factor:6.2f}  {'yes' if ok else 'NO'}",
                 flush=True,
             )
-        summary.append(
-            (path.stem, statistics.median(factors), passed, lidar_cost_ms(scenario, robot, arena))
-        )
+        cost = lidar_cost_ms(scenario, robot, load_arena(path))
+        summary.append((path.stem, statistics.median(factors), passed, cost))
     print("per arena: median real-time factor (target >= 3), acceptance, lidar ms per scan (< 2)")
     for name, factor, passed, cost in summary:
         print(

@@ -29,28 +29,55 @@ from pathlib import Path
 
 import numpy as np
 
-from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
 from drake_sim.base.map_files import load_map, save_map
-from drake_sim.navigation_run import NavigationRun
-from drake_sim.robots.turtlebot3 import default_turtlebot3_file
-from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.runs.navigate import RECIPE
+from drake_sim.runs.navigation import NavigationRun
 from drake_sim.systems.estimation.particle_filter import ParticleFilter
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
 from drake_sim.worlds.footprints import cast_rays
-from drake_sim.worlds.route import default_goals_file, load_goals, random_goals
+from drake_sim.worlds.route import random_goals
 
 AMCL_UPDATES = 100
 """Filter updates timed for AMCL's cost."""
 
 
-def run_goals(scenario, robot, arena, occupancy_map, goals, seed=0):
+def arena_override(path: Path) -> list[str]:
+    """The scenario's override that puts the robot in the arena at ``path``."""
+    return [f"arena={json.dumps(str(path))}"]
+
+
+def run_arena_goals(path: Path, map_file: Path, seed: int):
+    """The arena's goals file (``config/goals/<arena>.yaml``) driven on ``map_file``."""
+    run = RECIPE.start(overrides=arena_override(path), seed=seed, map=map_file)
+    run.run(run.default_duration())
+    return run, run.report()
+
+
+def run_random_goals(path: Path, occupancy_map, goals, seed: int = 0):
+    """``goals`` (drawn with a seed of their own, not the run's) driven on ``occupancy_map``:
+    the recipe loads the inputs, and the run takes the goals as they are."""
+    inputs = RECIPE.load(overrides=arena_override(path), seed=seed)
+    arena = load_arena(path)
     run = NavigationRun(
-        scenario, robot, arena, occupancy_map, start=arena.start_pose(), goals=goals, seed=seed
+        inputs.scenario, inputs.robot, arena, occupancy_map, start=arena.start_pose(), goals=goals
     )
     run.run(run.default_duration())
     return run, run.report()
+
+
+def map_files(folder: Path, map_dir: Path | None, robot) -> dict[str, Path]:
+    """Each shipped arena's map file: ``map_dir``'s ``<arena>.yaml``, else its ground truth at
+    the lidar's height saved in ``folder``."""
+    files = {}
+    for path in shipped_arenas():
+        if map_dir is not None:
+            files[path.stem] = map_dir / f"{path.stem}.yaml"
+        else:
+            truth = arena_grid(load_arena(path), 0.05, height=robot.scan_height)
+            files[path.stem] = save_map(truth, folder / path.stem)[1]
+    return files
 
 
 def amcl_cost_ms(scenario, occupancy_map, arena, scan_config) -> float:
@@ -127,18 +154,16 @@ def main() -> None:
     parser.add_argument("--map-dir", type=Path, help="saved maps <arena>.yaml (default: truth)")
     parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
-    scenario = load_navigation_scenario(default_scenario_file())
-    robot = load_turtlebot3_params(default_turtlebot3_file())
-    top = robot.limits.max_linear_velocity
-    maps = {}
+    inputs = RECIPE.load()  # config/navigation_scenario.yaml, config/turtlebot3.yaml
     with tempfile.TemporaryDirectory() as tmp:
-        for path in shipped_arenas():
-            arena = load_arena(path)
-            if args.map_dir is not None:
-                maps[path.stem] = load_map(args.map_dir / f"{path.stem}.yaml")
-            else:
-                truth = arena_grid(arena, 0.05, height=robot.scan_height)
-                maps[path.stem] = load_map(save_map(truth, Path(tmp) / path.stem)[1])
+        files = map_files(Path(tmp), args.map_dir, inputs.robot)
+        measure(args, inputs.scenario, inputs.robot, files)
+
+
+def measure(args, scenario, robot, files: dict[str, Path]) -> None:
+    """Runs and prints what the module docstring says, on the maps in ``files``."""
+    top = robot.limits.max_linear_velocity
+    maps = {name: load_map(path) for name, path in files.items()}
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
     print(
         f"maps: {'saved, ' + str(args.map_dir) if args.map_dir else 'ground truth'}; "
@@ -147,13 +172,10 @@ def main() -> None:
     )
     room_file = next(p for p in shipped_arenas() if p.stem == "room")
     room = load_arena(room_file)
-    room_goals = [
-        np.array([g.x, g.y, math.radians(g.yaw)])
-        for g in load_goals(default_goals_file(room_file), room)
-    ]
     factors, runs, arena_rows = [], [], []
     for index in range(args.runs):
-        _, report = run_goals(scenario, robot, room, maps["room"], room_goals, seed=index)
+        run, report = run_arena_goals(room_file, files["room"], seed=index)
+        room_goals = run.goals
         factors.append(report.real_time_factor)
         reached = f"{sum(g.reached for g in report.goals)}/{len(room_goals)}"
         times = {key: getattr(report, key) for key, *_ in RUN_COLUMNS[1:4]}
@@ -172,7 +194,7 @@ def main() -> None:
     for path in shipped_arenas():
         arena = load_arena(path)
         goals = random_goals(arena, args.goals, seed=7)
-        _, r = run_goals(scenario, robot, arena, maps[path.stem], goals)
+        _, r = run_random_goals(path, maps[path.stem], goals)
         reached = [g for g in r.goals if g.reached]
         worst = max(
             (g.time_s / (g.path_length_m / top) for g in reached if g.path_length_m > 0),

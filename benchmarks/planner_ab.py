@@ -50,7 +50,7 @@ def worker(checkout: Path, timeout: float, settings: list[str], folder: Path) ->
     timed as that benchmark times it."""
     sys.path.insert(0, str(checkout))
     import planning
-    from planning.benchmark import run_problem
+    from drake_sim.tools.plan_benchmark import run_problem
     from planning.io import mbm
     from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 

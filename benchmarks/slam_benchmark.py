@@ -28,8 +28,10 @@ import numpy as np
 
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
+from drake_sim.base.planar import compose
+from drake_sim.base.planar import relative_pose as relative
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid, known_fraction, occupancy_iou
-from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, compose, relative
+from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam
 from drake_sim.worlds.arena import arena_grid, load_arena, shipped_arenas
 from drake_sim.worlds.route import default_route_file, load_route
 

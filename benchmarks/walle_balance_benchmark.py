@@ -28,13 +28,14 @@ import numpy as np
 from pydrake.common import RandomGenerator
 from pydrake.systems.analysis import Simulator
 
-from diagrams.walle_balance import make_walle_diagram, run_walle, walle_track
+from diagrams.walle_balance import make_walle_diagram
 from diagrams.walle_balance_scenario import Push, WalleBalanceScenario, load_walle_balance_scenario
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import config_dir
 from drake_sim.robots.walle import default_robot_file
 from drake_sim.robots.walle_params import WalleParams, load_walle_params
+from drake_sim.runs.walle_track import run_walle, walle_track
 from drake_sim.systems.control.balance_controller import CONTROLLERS, STATUS_FIELDS
 
 S, S_REF = STATUS_FIELDS.index("s"), STATUS_FIELDS.index("s_ref")

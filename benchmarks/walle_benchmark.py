@@ -15,22 +15,21 @@ depend on the machine.
 """
 
 import argparse
-import dataclasses as dc
 import json
 import os
 import platform
 import statistics
 
-from diagrams.walle_scenario import default_scenario_file, load_walle_scenario
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
-from drake_sim.robots.walle import default_robot_file
-from drake_sim.robots.walle_params import load_walle_params
-from drake_sim.walle_run import WalleCourseRun, WalleReport
-from drake_sim.worlds.course import load_course, shipped_courses
+from drake_sim.runs.walle import RECIPE, WalleReport
+from drake_sim.worlds.course import shipped_courses
 
 SPEED_COURSE = "oval"
 """The shipped course whose lap is timed."""
+
+MODE = ["mode=both"]
+"""The scenario's override: balancing while following the line."""
 
 COLUMNS = (
     ("fraction", "course_fraction", "{:.2f}"),
@@ -95,9 +94,9 @@ def figures(settings: dict, laps: list[WalleReport], courses: dict[str, dict]) -
     }
 
 
-def run_course(scenario, robot, path, *, seed: int | None = None) -> WalleReport:
+def run_course(path, *, seed: int | None = None) -> WalleReport:
     """One headless run of ``path`` until its default end (one lap, the finish, a fall)."""
-    run = WalleCourseRun(scenario, robot, load_course(path), seed=seed)
+    run = RECIPE.start(overrides=[*MODE, f"course={json.dumps(str(path))}"], seed=seed)
     run.run(run.default_duration(viewer=False))
     return run.report()
 
@@ -111,8 +110,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3, help="timed laps of the oval")
     parser.add_argument("--json", type=output_file("figures file"), help="write the figures")
     args = parser.parse_args()
-    scenario = dc.replace(load_walle_scenario(default_scenario_file()), mode="both")
-    robot = load_walle_params(default_robot_file())
+    scenario = RECIPE.load(overrides=MODE).scenario
     courses = {path.stem: path for path in shipped_courses()}
     camera = scenario.camera
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores")
@@ -123,7 +121,7 @@ def main() -> None:
     print(f"real-time factor, one lap of {SPEED_COURSE}:")
     factors, laps = [], []
     for index in range(args.runs):
-        report = run_course(scenario, robot, courses[SPEED_COURSE])
+        report = run_course(courses[SPEED_COURSE])
         laps.append(report)
         factors.append(report.real_time_factor)
         print(
@@ -135,7 +133,7 @@ def main() -> None:
     print(f"{'course':>10} " + " ".join(f"{name:>13}" for name, _, _ in COLUMNS))
     rows = {}
     for name, path in courses.items():
-        row = rows[name] = run_course(scenario, robot, path).to_dict()
+        row = rows[name] = run_course(path).to_dict()
         cells = (f"{_cell(fmt, row[key]):>13}" for _, key, fmt in COLUMNS)
         print(f"{name:>10} " + " ".join(cells), flush=True)
     if args.json:

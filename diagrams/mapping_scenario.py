@@ -3,6 +3,7 @@ wheel odometry's errors, the SLAM, the route follower, the plant and the viewer.
 ``config/mapping_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
+import functools
 import math
 from pathlib import Path
 
@@ -82,13 +83,9 @@ def default_scenario_file() -> Path:
     return config_dir() / "mapping_scenario.yaml"
 
 
-def load_mapping_scenario(filename, *, defaults=None) -> MappingScenario:
-    """Loads ``filename`` into a MappingScenario (unknown keys are errors; missing keys keep
-    ``defaults``, the schema's own when None) and checks it.
-
-    Raises:
-        ConfigError: naming the file and the key at fault.
-    """
-    return load_checked(
-        MappingScenario, filename, check_mapping_scenario, what="scenario file", defaults=defaults
-    )
+load_mapping_scenario = functools.partial(
+    load_checked, MappingScenario, check=check_mapping_scenario, what="scenario file"
+)
+"""``load_mapping_scenario(filename, *, defaults=None)``: the file into a ``MappingScenario``
+(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
+a ``ConfigError`` names the file and the key at fault."""

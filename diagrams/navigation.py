@@ -13,12 +13,12 @@ from pydrake.systems.primitives import LogVectorOutput
 from diagrams.lidar_robot import add_lidar_robot
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base.map_files import OccupancyMap
+from drake_sim.navigation.navigator import Navigator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.estimation.amcl import Amcl
 from drake_sim.systems.viewer.navigation_view import NavigationView
 from drake_sim.systems.viewer.trails import TrailVisualizer
 from drake_sim.worlds.arena import Arena
-from planning.mobile.navigator import Navigator
 
 
 def make_navigation_diagram(

@@ -4,6 +4,7 @@
 in ``config/navigation_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
+import functools
 import math
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from diagrams.mapping_scenario import config_path
 from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
+from drake_sim.navigation.navigator import NavigatorConfig, check_navigator_config
 from drake_sim.systems.estimation.amcl import (
     AmclConfig,
     check_amcl_config,
@@ -22,7 +24,6 @@ from drake_sim.systems.estimation.amcl import (
 from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig, check_config
 from drake_sim.systems.sensors.lidar import LidarConfig, check_lidar_config
 from drake_sim.worlds.arena import Arena, BoxSpec, CylinderSpec, ObstacleSpec, check_arena
-from planning.mobile.navigator import NavigatorConfig, check_navigator_config
 
 __all__ = ["NavigationScenario", "config_path", "load_navigation_scenario"]
 
@@ -104,17 +105,9 @@ def default_scenario_file() -> Path:
     return config_dir() / "navigation_scenario.yaml"
 
 
-def load_navigation_scenario(filename, *, defaults=None) -> NavigationScenario:
-    """Loads ``filename`` into a NavigationScenario (unknown keys are errors; missing keys keep
-    ``defaults``, the schema's own when None) and checks it.
-
-    Raises:
-        ConfigError: naming the file and the key at fault.
-    """
-    return load_checked(
-        NavigationScenario,
-        filename,
-        check_navigation_scenario,
-        what="scenario file",
-        defaults=defaults,
-    )
+load_navigation_scenario = functools.partial(
+    load_checked, NavigationScenario, check=check_navigation_scenario, what="scenario file"
+)
+"""``load_navigation_scenario(filename, *, defaults=None)``: the file into a ``NavigationScenario``
+(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
+a ``ConfigError`` names the file and the key at fault."""

@@ -38,9 +38,9 @@ from pydrake.systems.primitives import (
 )
 from pydrake.visualization import ApplyVisualizationConfig, VisualizationConfig
 
-from diagrams.panda_station_systems import FreeBodyPose, add_scene_box, box_pose
+from diagrams.scene_boxes import add_scene_box, box_pose
 from drake_sim.base.errors import ConfigError
-from planning.config import PandaModelConfig
+from planning.execution.free_body_pose import FreeBodyPose
 from planning.io.scene_files import SceneFile
 from planning.model.layout import (
     FINGER_OPEN,
@@ -56,6 +56,7 @@ from planning.model.panda import (
     apply_disabled_collisions,
     disabled_collision_pairs,
 )
+from planning.model.panda_config import PandaModelConfig
 from planning.scene_objects import FREE_BODY_POSITIONS, free_body_positions
 
 PANDA = "panda"

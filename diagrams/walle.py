@@ -7,11 +7,10 @@ balance (or diff-drive) controls, the line camera, the ``LineDetector`` and ``Li
 import dataclasses as dc
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant
-from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from diagrams.walle_balance import (
@@ -26,7 +25,7 @@ from diagrams.walle_scenario import WalleScenario
 from drake_sim.robots.walle import BODY_LINK, CAMERA_OPTICAL_FRAME, add_walle
 from drake_sim.robots.walle_params import WalleParams
 from drake_sim.systems.control.line_follower import LineFollower
-from drake_sim.systems.perception.line_detection import camera_pose_over_ground
+from drake_sim.systems.perception.camera_pose import CameraPoseFromPitch
 from drake_sim.systems.perception.line_detector import LineDetector
 from drake_sim.systems.sensors.camera import add_camera
 from drake_sim.systems.viewer.teleop import MeshcatTeleop, TeleopConfig
@@ -36,43 +35,6 @@ from drake_sim.worlds.course_floor import add_course_floor
 COURSE_LOGGED = (*LOGGED, "measurement", "command", "follower_mode")
 """Signals logged in the line-following modes (``follow``, ``both``); ``balance`` logs
 ``LOGGED``. The diagram has a ``log_<name>`` sink each."""
-
-
-class CameraPoseFromPitch(LeafSystem):
-    """The camera's pose X_GC over the robot's ground frame G, from the estimated pitch.
-
-    .. pydrake_system::
-
-        name: CameraPoseFromPitch
-        input_ports:
-        - pitch_estimate
-        output_ports:
-        - camera_pose
-
-    ``pitch_estimate`` is ``[theta, theta_dot]`` (rad, rad/s; the ``PitchEstimator``'s);
-    ``camera_pose`` the ``RigidTransform`` X_GC for the ``LineDetector``'s ``camera_pose``
-    input: the body leans ``theta`` about its axle, whose midpoint is ``wheel.radius`` above
-    the floor, and the camera sits at X_BC on the body B.
-    """
-
-    def __init__(self, *, robot: WalleParams, X_BC: RigidTransform):
-        super().__init__()
-        self._X_BC = X_BC
-        self._r = robot.wheel.radius
-        self._p_BA = np.array([0.0, 0.0, robot.axle_z])
-        self._pitch = self.DeclareVectorInputPort("pitch_estimate", 2)
-        self.DeclareAbstractOutputPort(
-            "camera_pose", lambda: AbstractValue.Make(RigidTransform()), self._calc
-        )
-
-    def pose(self, theta: float) -> RigidTransform:
-        """X_GC for a lean of ``theta`` (rad, positive forward)."""
-        R_WB = RotationMatrix.MakeYRotation(theta)
-        X_WB = RigidTransform(R_WB, np.array([0.0, 0.0, self._r]) - R_WB @ self._p_BA)
-        return camera_pose_over_ground(X_WB, self._X_BC)
-
-    def _calc(self, context, output):
-        output.set_value(self.pose(float(self._pitch.Eval(context)[0])))
 
 
 def _robot_scenario(scenario: WalleScenario, course: Course):

@@ -2,86 +2,35 @@
 
 ``add_walle_controls`` wires the sensors and controllers to a robot already in a plant (for a
 diagram that brings its own floor, a course, a camera); ``make_walle_diagram`` builds the
-whole thing on a flat floor; ``run_walle`` simulates it headless and measures what it did.
+whole thing on a flat floor (``drake_sim.runs.walle_track.run_walle`` simulates it headless and
+measures what it did).
 """
 
-import dataclasses as dc
 import math
-import time
 
 import numpy as np
-from pydrake.common import RandomGenerator
-from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.multibody.math import SpatialForce
-from pydrake.multibody.plant import (
-    AddMultibodyPlant,
-    ExternallyAppliedSpatialForce,
-    MultibodyPlant,
-)
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant
+from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, MatrixGain
 from pydrake.visualization import ApplyVisualizationConfig
 
 from diagrams.ddrive_world import add_ground
-from diagrams.walle_balance_scenario import Push, WalleBalanceScenario, WalleStart
+from diagrams.walle_balance_scenario import WalleBalanceScenario, WalleStart
 from drake_sim.robots.walle import BODY_LINK, WHEEL_JOINTS, add_walle
 from drake_sim.robots.walle_params import WalleParams
-from drake_sim.systems.axle import axle_yaw_and_pitch
 from drake_sim.systems.control.balance_controller import BalanceController
 from drake_sim.systems.control.diff_drive_controller import DiffDriveController
 from drake_sim.systems.estimation.pitch_estimator import PitchEstimator
-from drake_sim.systems.sensors.imu import add_imu, rotation_from_quaternion
+from drake_sim.systems.pushes import PushSchedule
+from drake_sim.systems.sensors.imu import add_imu
 
 ROBOT_NAME = "walle"
 """The robot's model instance name."""
 LOGGED = ("state", "pitch_estimate", "wheel_torques")
 """Signals logged every ``scenario.log_period``: the diagram has a ``log_<name>`` sink each
 (``state`` is the robot's plant state: the ground truth)."""
-
-
-class PushSchedule(LeafSystem):
-    """Pushes a body at a point with constant forces over given time windows.
-
-    .. pydrake_system::
-
-        name: PushSchedule
-        output_ports:
-        - spatial_forces
-
-    ``spatial_forces`` (a list of ``ExternallyAppliedSpatialForce``, for the plant's
-    ``applied_spatial_force`` input) holds the sum of the pushes active at the current time
-    (``push.time <= t < push.time + push.duration``), applied at ``p_BoBq_B`` on the body.
-    """
-
-    def __init__(self, *, body_index, p_BoBq_B: np.ndarray, pushes: list[Push]):
-        super().__init__()
-        self._body_index = body_index
-        self._p_BoBq_B = np.asarray(p_BoBq_B, dtype=float)
-        self._pushes = [(p.time, p.time + p.duration, np.asarray(p.force, float)) for p in pushes]
-        self.DeclareAbstractOutputPort(
-            "spatial_forces",
-            lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
-            self._calc,
-            {self.time_ticket()},
-        )
-
-    def force_at(self, t: float) -> np.ndarray:
-        """The total force (N, world frame) at time ``t`` (s)."""
-        total = np.zeros(3)
-        for start, end, force in self._pushes:
-            if start <= t < end:
-                total += force
-        return total
-
-    def _calc(self, context, output):
-        push = ExternallyAppliedSpatialForce()
-        push.body_index = self._body_index
-        push.p_BoBq_B = self._p_BoBq_B
-        push.F_Bq_W = SpatialForce(np.zeros(3), self.force_at(context.get_time()))
-        output.set_value([push])
 
 
 def walle_start_pose(start: WalleStart, robot: WalleParams) -> RigidTransform:
@@ -214,84 +163,3 @@ def build_walle_diagram(
     diagram = builder.Build()
     diagram.set_name(name)
     return diagram
-
-
-@dc.dataclass
-class WalleTrack:
-    """The robot's true motion, sampled every log period: one entry per sample."""
-
-    t: np.ndarray  # s.
-    p_WA: np.ndarray  # 2 x N, the axle's midpoint on the floor, m.
-    yaw: np.ndarray  # rad, heading of the axle frame, unwrapped.
-    pitch: np.ndarray  # rad, lean about the axle, positive forward.
-
-
-def walle_track(diagram: Diagram, context, robot: WalleParams) -> WalleTrack:
-    """Reads the logged ground truth of a diagram from ``make_walle_diagram``."""
-    plant = diagram.GetSubsystemByName("plant")
-    instance = plant.GetModelInstanceByName(ROBOT_NAME)
-    body = plant.GetBodyByName(BODY_LINK, instance)
-    log = diagram.GetSubsystemByName("log_state").FindLog(context)
-    state = log.data()
-    # Where the body's quaternion and position sit in the instance's state.
-    indices = plant.GetPositionsFromArray(instance, np.arange(plant.num_positions()))
-    start = list(indices).index(body.floating_positions_start())
-    p_BA = np.array([0.0, 0.0, robot.axle_z])
-    points, yaws, pitches = [], [], []
-    for column in state.T:
-        R_WB = rotation_from_quaternion(column[start : start + 4])
-        points.append(column[start + 4 : start + 6] + (R_WB @ p_BA)[:2])
-        yaw, pitch = axle_yaw_and_pitch(R_WB)
-        yaws.append(yaw)
-        pitches.append(pitch)
-    return WalleTrack(log.sample_times(), np.array(points).T, np.unwrap(yaws), np.array(pitches))
-
-
-@dc.dataclass
-class WalleRun:
-    """What a headless run did, measured on the ground truth after ``settle_time``."""
-
-    fell: bool  # The lean passed the controller's fallen pitch.
-    max_abs_pitch_deg: float  # After settle_time.
-    max_drift_m: float  # Largest distance of the axle from where it started, after settle_time.
-    track: WalleTrack
-    sim_time_s: float
-    wall_time_s: float
-    real_time_factor: float
-
-
-def run_walle(
-    scenario: WalleBalanceScenario,
-    robot: WalleParams,
-    duration: float,
-    *,
-    cmd_vel=(0.0, 0.0),
-    settle_time: float = 1.0,
-    seed: int | None = None,
-) -> WalleRun:
-    """Builds the diagram, simulates ``duration`` s headless (flat out) with ``cmd_vel``
-    fixed, and measures the run. ``seed`` (default ``scenario.random_seed``) seeds the IMU."""
-    diagram = make_walle_diagram(scenario, robot)
-    simulator = Simulator(diagram)
-    context = simulator.get_mutable_context()
-    diagram.SetRandomContext(
-        context, RandomGenerator(scenario.random_seed if seed is None else seed)
-    )
-    if diagram.HasInputPort("cmd_vel"):
-        diagram.GetInputPort("cmd_vel").FixValue(context, np.asarray(cmd_vel, float))
-    start = time.perf_counter()
-    simulator.AdvanceTo(duration)
-    wall = time.perf_counter() - start
-    track = walle_track(diagram, context, robot)
-    after = track.t >= settle_time
-    fallen = math.radians(scenario.balance.fallen_pitch)
-    drift = np.linalg.norm(track.p_WA - track.p_WA[:, :1], axis=0)
-    return WalleRun(
-        fell=bool(np.any(np.abs(track.pitch) > fallen)),
-        max_abs_pitch_deg=float(np.degrees(np.max(np.abs(track.pitch[after]), initial=0.0))),
-        max_drift_m=float(np.max(drift[after], initial=0.0)),
-        track=track,
-        sim_time_s=duration,
-        wall_time_s=wall,
-        real_time_factor=duration / wall if wall > 0 else math.inf,
-    )

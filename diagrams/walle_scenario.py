@@ -3,6 +3,7 @@ line detector and follower, and the robot's own sensors, controllers and pushes 
 ``WalleBalanceScenario``). Values live in ``config/walle_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
+import functools
 import math
 from pathlib import Path
 
@@ -47,7 +48,7 @@ class WalleScenario:
     # simulator, visualisation, log period and random seed (its start and driver are set from
     # the course and the mode).
     walle: WalleBalanceScenario = dc.field(default_factory=WalleBalanceScenario)
-    duration: float = 0.0  # s simulated; 0: long enough for one lap (see walle_run).
+    duration: float = 0.0  # s simulated; 0: long enough for one lap (see drake_sim.runs.walle).
     finish_margin: float = 0.2  # m: an open course is finished this far before its end.
     duration_margin: float = 5.0  # s added to 1.5 x the course's length / speed.
 
@@ -77,16 +78,12 @@ def check_walle_scenario(scenario: WalleScenario, filename: str = "scenario") ->
     return scenario
 
 
-def load_walle_scenario(filename, *, defaults=None) -> WalleScenario:
-    """Loads ``filename`` into a WalleScenario (unknown keys are errors; missing keys keep
-    ``defaults``, the schema's own when None) and checks it.
-
-    Raises:
-        ConfigError: naming the file and the key at fault.
-    """
-    return load_checked(
-        WalleScenario, filename, check_walle_scenario, what="scenario file", defaults=defaults
-    )
+load_walle_scenario = functools.partial(
+    load_checked, WalleScenario, check=check_walle_scenario, what="scenario file"
+)
+"""``load_walle_scenario(filename, *, defaults=None)``: the file into a ``WalleScenario``
+(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
+a ``ConfigError`` names the file and the key at fault."""
 
 
 def default_scenario_file() -> Path:

@@ -15,12 +15,10 @@ import numpy as np
 from pydrake.geometry import StartMeshcat
 
 from diagrams.ddrive_model import make_ddrive_model_diagram
-from diagrams.flip_scenario import load_flip_scenario
 from drake_sim.base import cli
 from drake_sim.base.resources import config_dir
-from drake_sim.flip_run import FlipRun
-from drake_sim.robots.ddrive import default_robot_file
-from drake_sim.robots.ddrive_params import load_robot_params
+from drake_sim.runs.command import add_file_options
+from drake_sim.runs.flip import RECIPE, FlipRun
 
 STOP_BUTTON = "Stop"
 """The ``--view-only`` page's button that ends the run, like Ctrl-C."""
@@ -30,9 +28,7 @@ SLIDER_POLL_PERIOD = 0.02  # s of wall time between reads of the sliders.
 
 def _parse_args(argv):
     parser = cli.ArgumentParser(prog="python -m drake_sim.view", description=__doc__.split("\n")[0])
-    cli.add_robot_and_config_options(
-        parser, default_robot=default_robot_file(), default_config=config_dir() / "view.yaml"
-    )
+    add_file_options(parser, RECIPE, default_scenario=config_dir() / "view.yaml")
     parser.add_argument(
         "--view-only", action="store_true", help="the robot alone, with joint sliders"
     )
@@ -110,14 +106,13 @@ def _view_only(args, robot) -> int:
 
 def main(argv=None) -> int:
     args = _parse_args(argv)
-    robot = load_robot_params(args.robot)
+    inputs = RECIPE.load(scenario=args.scenario, robot=args.robot)
     if args.view_only:
-        return _view_only(args, robot)
+        return _view_only(args, inputs.robot)
 
-    scenario = load_flip_scenario(args.config)
     meshcat = StartMeshcat()
-    run = FlipRun(scenario, robot, meshcat=meshcat, controller="teleop")
-    pose = scenario.scene.robot_pose
+    run = FlipRun(inputs.scenario, inputs.robot, meshcat=meshcat, controller="teleop")
+    pose = inputs.scenario.scene.robot_pose
     meshcat.SetCameraPose([pose.x - 2.5, pose.y - 2.5, 1.5], [pose.x + 0.5, pose.y, 0.2])
     meshcat.SetProperty("/Grid", "visible", False)  # The street is the floor.
     try:
@@ -125,14 +120,18 @@ def main(argv=None) -> int:
             meshcat.StartRecording()
         print(DRIVE_HELP)
         cli.announce(meshcat, "running")
-        run.advance_to(args.duration if args.duration is not None else np.inf)
-    except BaseException as e:
+        run.run(args.duration if args.duration is not None else np.inf)  # until a stop
+    except BaseException as e:  # a stop before the run's own loop caught it
         if not cli.is_stop(e):
-            raise  # else Ctrl-C or SIGTERM: a user stop.
+            raise
     finally:
         if args.record:
             cli.write_replay(meshcat, args.record)
     print(f"simulated {run.context.get_time():.2f} s in {run.wall_time:.2f} s wall time")
+    error = run.error(None)
+    if error:
+        print(f"error: {error}", file=sys.stderr)
+        return cli.EXIT_FAILED
     return cli.EXIT_OK
 
 

@@ -12,7 +12,8 @@ library's own:
 * ``planning.execution``: the commander systems and action handles of the interface.
 * ``planning.task``: pick-and-place built on the API.
 
-``python -m planning.benchmark`` and ``python -m planning.regions`` are the package's tools.
+Its tools are apps and stand outside it: ``python -m planning.benchmark`` (a name that forwards
+to ``drake_sim.tools.plan_benchmark``) and ``python -m drake_sim.tools.regions``.
 """
 
 from planning.config import IkOptions, PandaPlanningConfig, load_panda_config

@@ -20,7 +20,6 @@ is only partly achievable is returned with ``success=False`` and the fraction ac
 
 import dataclasses as dc
 import functools
-import sys
 import time
 
 import numpy as np
@@ -28,21 +27,14 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter
-from planning.collision.hull_kernel import prove_free_packed
-from planning.collision.sphere_batch import classify_many
-from planning.collision.sphere_checker import sphere_model
-from planning.collision.sphere_kernel import announce_compile
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
 from planning.plan import Plan, PlanResult
 from planning.planner_options import MotionPlannerOptions, load_planner_options, request_timeout
+from planning.planner_setup import kernels_now, make_search, warm_up_timing
 from planning.robot_state import RobotState
 from planning.scene_objects import describe_scene
-from planning.search import compiled_rrt
 from planning.search.cartesian import cartesian_path
-from planning.search.joint_path import JointPathSearch
-from planning.search.pose_kernel import line, newton
-from planning.timing import cubic, toppra
 from planning.timing.retime import RetimeOptions
 
 __all__ = ["MotionPlanner", "MotionPlannerOptions", "load_planner_options"]
@@ -63,65 +55,15 @@ class MotionPlanner:
         self._options.check()
         self._state = state if state is not None else RobotState(scene)
         # Until the compiled search is in numba's cache, plan on Drake's checker while it is
-        # built in the background (``planning.planner_kernels``), then switch to it.
-        self._pending = self._options.spheres.enabled and not self._kernels_now()
-        announce_compile(
-            toppra.solve,
-            cubic.evaluate,
-            newton,
-            line,
-            note="note: compiling the planner's timing and IK once for this machine (~15 s)...",
-            kernel=False,
-        )
-        toppra.warm_up()  # the time parameterisation's compiled TOPP-RA and splines
-        cubic.warm_up()
-        self._search = self._make_search()  # .gcs set by use_gcs()
+        # built in the background (``planning.planner_setup``), then switch to it.
+        self._pending = self._options.spheres.enabled and not kernels_now()
+        warm_up_timing()
+        self._search = make_search(scene, self._options, self._pending)  # .gcs set by use_gcs()
         lower, upper = self._search.limits  # for _as_arm: the limits, and with their tolerance
         self._limits = (lower, upper, lower - 1e-6, upper + 1e-6)
         if self._pending:  # IK's steps come from the background build, compiled once
             planner_kernels.await_shared()
         self._state.ik_solver()  # made now rather than in the first pose request
-
-    def _kernels_now(self) -> bool:
-        """Whether the compiled search can be had now: it is cached (or, in ``wait`` mode, has
-        been built or waited for). Otherwise a background build has been started."""
-        if planner_kernels.mode() == "wait":  # progress on a terminal; logs stay clean
-            line = planner_kernels.ProgressLine("planner") if sys.stderr.isatty() else None
-            planner_kernels.wait_ready(progress=line)
-            return True
-        if not planner_kernels.start_background():  # False: the kernels are cached
-            return True
-        print(
-            "note: the planner's kernels are compiling once for this machine in the background "
-            f"({planner_kernels.describe(planner_kernels.read_status())}); until they are "
-            "ready, plans use Drake's collision checker",
-            file=sys.stderr,
-            flush=True,
-        )
-        return False
-
-    def _make_search(self) -> JointPathSearch:
-        """The joint path search with the options' collision models; on Drake's checker alone
-        while the compiled search is pending (``_pending``)."""
-        options = self._options
-        if self._pending:
-            options = dc.replace(options, spheres=dc.replace(options.spheres, enabled=False))
-        else:
-            announce_compile(
-                compiled_rrt.solve,
-                compiled_rrt.plan,
-                compiled_rrt.fine_check,
-                classify_many,
-                prove_free_packed,
-            )
-            spheres = options.spheres
-            if spheres.enabled:  # covers are made (or read from the cache) here, once
-                sphere_model(self._scene, spheres.slack)
-                if spheres.refine_slack:
-                    sphere_model(self._scene, spheres.refine_slack)
-        search = JointPathSearch(self._scene, options)
-        search.warm_up()  # the compiled search is compiled or loaded here, once
-        return search
 
     def _switch_when_ready(self) -> None:
         """At a request's start: switches to the compiled search once its background build has
@@ -130,7 +72,7 @@ class MotionPlanner:
             return
         self._pending = False
         gcs = self._search.gcs
-        self._search = self._make_search()
+        self._search = make_search(self._scene, self._options, pending=False)
         self._search.gcs = gcs
 
     def use_gcs(self, regions, region_options=None, gcs_options=None) -> None:

@@ -8,9 +8,9 @@ file with any subset of them loads with ``load_planner_options(filename)``, sect
     timing: {velocity_scaling: 0.5}
 
 Units: rad for joints, m for lengths, s for times. "MBM" is the MotionBenchMaker Panda set
-(``planning.benchmark``). Each class's ``check()`` raises ValueError naming the bad field
-("rrt.step must be > 0, ..."). This module has no ``from __future__ import annotations``: the
-YAML loader reads the field types at run time.
+(``drake_sim.tools.plan_benchmark``). Each class's ``check()`` raises ValueError naming the bad
+field ("rrt.step must be > 0, ..."). This module has no ``from __future__ import annotations``:
+the YAML loader reads the field types at run time.
 """
 
 import dataclasses as dc
@@ -33,6 +33,12 @@ def _require(ok: bool, field: str, rule: str, value) -> None:
 
 def _positive(value, field: str) -> None:
     _require(value > 0.0, field, "> 0", value)
+
+
+def _finite(value, field: str, rule: str, *, zero_ok: bool) -> None:
+    """Requires a finite ``value`` >= 0 (``zero_ok``) or > 0; ``rule`` says so in the message."""
+    low_ok = value >= 0.0 if zero_ok else value > 0.0
+    _require(low_ok and math.isfinite(value), field, rule, value)
 
 
 def _seconds(value) -> bool:
@@ -89,18 +95,9 @@ class RrtConnectOptions:
         _positive(self.step, f"{prefix}.step")
         _fraction(self.goal_bias, f"{prefix}.goal_bias", zero_ok=True)
         _flag(self.balance, f"{prefix}.balance")
-        _require(
-            self.dynamic_domain >= 0.0 and math.isfinite(self.dynamic_domain),
-            f"{prefix}.dynamic_domain",
-            ">= 0 (0: off)",
-            self.dynamic_domain,
-        )
-        _require(
-            self.dynamic_domain_min > 0.0 and math.isfinite(self.dynamic_domain_min),
-            f"{prefix}.dynamic_domain_min",
-            "> 0 and finite",
-            self.dynamic_domain_min,
-        )
+        _finite(self.dynamic_domain, f"{prefix}.dynamic_domain", ">= 0 (0: off)", zero_ok=True)
+        rule = "> 0 and finite"
+        _finite(self.dynamic_domain_min, f"{prefix}.dynamic_domain_min", rule, zero_ok=False)
         _count(self.batch, f"{prefix}.batch", least=1)
         _positive(self.restart_interval, f"{prefix}.restart_interval")
 
@@ -146,8 +143,7 @@ class ValidationOptions:
         _positive(self.repair_timeout, f"{prefix}.repair_timeout")
         _positive(self.repair_step, f"{prefix}.repair_step")
         field = f"{prefix}.repair_resolution"
-        ok = self.repair_resolution > 0.0 and math.isfinite(self.repair_resolution)
-        _require(ok, field, "finite and > 0 rad", self.repair_resolution)
+        _finite(self.repair_resolution, field, "finite and > 0 rad", zero_ok=False)
 
 
 @dc.dataclass
@@ -263,12 +259,7 @@ class SphereCheckOptions:
         _count(self.drake_fallback_after, f"{prefix}.drake_fallback_after", least=0)
         _flag(self.hull_proofs, f"{prefix}.hull_proofs")
         _positive(self.search_resolution, f"{prefix}.search_resolution")
-        _require(
-            self.anchor_radius >= 0.0 and math.isfinite(self.anchor_radius),
-            f"{prefix}.anchor_radius",
-            ">= 0",
-            self.anchor_radius,
-        )
+        _finite(self.anchor_radius, f"{prefix}.anchor_radius", ">= 0", zero_ok=True)
         _require(
             self.refine_slack == 0.0 or 0.0 < self.refine_slack < self.slack,
             f"{prefix}.refine_slack",

@@ -25,7 +25,7 @@ _PLANS = (
 
 def _plans(item) -> bool:
     path = item.path.as_posix()
-    return "tests/planning/mobile/" not in path and any(p in path for p in _PLANS)
+    return "tests/drake_sim/navigation/" not in path and any(p in path for p in _PLANS)
 
 
 def pytest_collection_modifyitems(config, items):

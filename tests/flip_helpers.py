@@ -4,9 +4,9 @@ import dataclasses as dc
 
 from diagrams.flip_scenario import FlipScenario, load_flip_scenario
 from drake_sim.base.resources import config_dir
-from drake_sim.flip_run import FlipRun
 from drake_sim.robots.ddrive import default_robot_file
 from drake_sim.robots.ddrive_params import RobotParams, load_robot_params
+from drake_sim.runs.flip import FlipRun
 
 
 def default_robot() -> RobotParams:
@@ -22,12 +22,17 @@ def flip_scenario(*, world: bool = False, upside_down: bool = False) -> FlipScen
     return dc.replace(scenario, scene=scene)
 
 
+def seeded(scenario: FlipScenario, seed: int) -> FlipScenario:
+    """``scenario`` with its seed (``scene.random_seed``: the IMU noise) set to ``seed``."""
+    return dc.replace(scenario, scene=dc.replace(scenario.scene, random_seed=seed))
+
+
 def run_for(seconds: float, *, robot=None, scenario=None, controller="flip", cmd_vel=None):
-    """Simulates ``seconds`` headless and returns the ``FlipRun``."""
-    run = FlipRun(
-        scenario or flip_scenario(), robot or default_robot(), controller=controller, seed=1
-    )
+    """Simulates ``seconds`` headless with seed 1 and returns the ``FlipRun``; a simulation
+    error fails the caller's test."""
+    scenario = seeded(scenario or flip_scenario(), 1)
+    run = FlipRun(scenario, robot or default_robot(), controller=controller)
     if cmd_vel is not None:
         run.diagram.GetInputPort("cmd_vel").FixValue(run.context, cmd_vel)
-    run.advance_to(seconds)
+    assert run.run(seconds) == "duration", run.failure
     return run

@@ -3,15 +3,13 @@ mapping run would save) or by a mapping run, the robot and the scenario."""
 
 import numpy as np
 
-from diagrams import mapping_scenario
 from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
 from drake_sim.base.map_files import OccupancyMap, load_map, save_map
 from drake_sim.base.resources import config_dir
-from drake_sim.mapping_run import MappingRun
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
+from drake_sim.runs.mapping import RECIPE as MAPPING
 from drake_sim.worlds.arena import arena_grid, load_arena
-from drake_sim.worlds.route import default_route_file, load_route
 
 
 def robot():
@@ -37,11 +35,7 @@ def saved_truth_map(name: str, folder) -> tuple[OccupancyMap, object]:
 def saved_slam_map(name: str, folder, seed: int = 0) -> tuple[OccupancyMap, object]:
     """The map that mapping the arena ``name`` along its default route saves (as
     ``python -m drake_sim.mapping`` does), loaded back; returns the map and its ``.yaml`` path."""
-    path = arena_file(name)
-    arena = load_arena(path)
-    waypoints = load_route(default_route_file(path), arena).waypoints
-    scenario = mapping_scenario.load_mapping_scenario(mapping_scenario.default_scenario_file())
-    run = MappingRun(scenario, robot(), arena, waypoints, seed=seed)
+    run = MAPPING.start(overrides=[f"arena=arenas/{name}.yaml"], seed=seed)
     assert run.run(run.default_duration()) == "route_done"
     _, yaml_file = run.save_map(folder / name)
     return load_map(yaml_file), yaml_file

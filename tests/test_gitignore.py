@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from drake_sim import mapping
+from drake_sim.runs import mapping
 from drake_sim.sweep import command as sweep_command
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -1,24 +1,50 @@
-"""The layers hold (docs/layout.md): no module imports one from a layer to its right.
+"""The layers hold (docs/architecture.md): no module imports one from a layer to its right, and no
+modules import each other in a loop.
 
 Every module of ``drake_sim``, ``planning`` and ``diagrams`` is parsed (``ast``, imports inside
-functions included) and given a layer by the longest matching prefix below; an import of a
-project module must land in the same layer or one to its left. ``planning`` has layers of its
-own inside, so that its rooms do not import each other in a loop either.
+functions and type-only ``TYPE_CHECKING`` imports included) and given a layer by the longest
+matching prefix below; an import of a project module must land in the same layer or one to its
+left. ``planning`` has layers of its own inside, so that its rooms do not import each other in
+a loop either. The apps are found where they stand, not listed: every top-level module of
+``drake_sim`` (``drake_sim/<app>.py``) and everything in ``drake_sim.sweep`` and
+``drake_sim.tools``.
+
+Within a layer imports may go either way, so loops are checked apart: between modules, and
+between rooms (a room is a module's first two dotted parts: ``planning.model``,
+``drake_sim.systems``, ``diagrams.flip``).
 """
 
-import ast
 from pathlib import Path
 
 import pytest
 
+from drake_sim.tools import architecture
+from drake_sim.tools.architecture import import_graph, project_modules, room_graph
+
+
+def imported_modules(module: str, path: Path) -> set[str]:
+    """The project modules ``path`` imports (``architecture.imported_modules``)."""
+    return architecture.imported_modules(module, path, frozenset(project_modules()))
+
+
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("drake_sim", "planning", "diagrams")
+APP_PACKAGES = ("drake_sim.sweep", "drake_sim.tools")
+"""Packages whose every module is an app (besides ``drake_sim``'s top-level modules)."""
+
+
+def app_prefixes(root: Path = ROOT) -> tuple[str, ...]:
+    """The apps by where they stand: ``drake_sim/<name>.py`` (not ``__init__``), and the
+    packages of ``APP_PACKAGES``."""
+    top = sorted(p.stem for p in (root / "drake_sim").glob("*.py") if p.stem != "__init__")
+    return (*(f"drake_sim.{name}" for name in top), *APP_PACKAGES)
+
 
 # Left to right. A prefix names a module or a package (and everything in it).
 LAYERS = (
     ("base", ("drake_sim", "drake_sim.base")),
     ("descriptions: robots and worlds", ("drake_sim.robots", "drake_sim.worlds")),
     ("systems", ("drake_sim.systems",)),
+    ("navigation: costmaps, planners, navigator", ("drake_sim.navigation",)),
     (
         "planning: errors, config, model, paths, objects",
         (
@@ -42,33 +68,15 @@ LAYERS = (
             "planning.plan",
             "planning.planner_options",
             "planning.planner_kernels",
+            "planning.planner_setup",
             "planning.motion_planner",
         ),
     ),
     ("planning: execution, interface", ("planning.execution", "planning.interface")),
-    ("planning: mobile navigation (costmaps, planners, navigator)", ("planning.mobile",)),
     ("planning: tasks and the public API", ("planning.task", "planning")),
     ("diagrams", ("diagrams",)),
-    (
-        "apps",
-        (
-            "drake_sim.flip",
-            "drake_sim.flip_run",
-            "drake_sim.walle",
-            "drake_sim.walle_run",
-            "drake_sim.mapping",
-            "drake_sim.mapping_run",
-            "drake_sim.navigate",
-            "drake_sim.sweep",
-            "drake_sim.navigation_run",
-            "drake_sim.view",
-            "drake_sim.pickplace",
-            "drake_sim.tools",
-            "planning.benchmark",
-            "planning.regions",
-            "planning._ompl_baseline",
-        ),
-    ),
+    ("runs: recipes and run harnesses", ("drake_sim.runs",)),
+    ("apps", app_prefixes()),
 )
 
 
@@ -84,41 +92,49 @@ def layer_of(module: str) -> int:
     return best
 
 
-def project_modules() -> dict[str, Path]:
-    modules = {}
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            parts = path.relative_to(ROOT).with_suffix("").parts
-            if parts[-1] == "__init__":
-                parts = parts[:-1]
-            modules[".".join(parts)] = path
-    return modules
-
-
-def imported_modules(module: str, path: Path) -> set[str]:
-    """The project modules ``path`` imports (``from a import b`` counts as ``a.b`` when that is a
-    module, else as ``a``)."""
-    is_package = path.name == "__init__.py"
-    known = project_modules()
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            names = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = module.split(".")
-                base = base[: len(base) - node.level + (1 if is_package else 0)]
-                origin = ".".join(base + ([node.module] if node.module else []))
-            else:
-                origin = node.module
-            names = [
-                f"{origin}.{a.name}" if f"{origin}.{a.name}" in known else origin
-                for a in node.names
-            ]
-        else:
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import loops of ``graph``: its strongly connected components of more than one node
+    (Tarjan's algorithm, iterative), each sorted, in sorted order."""
+    nodes = sorted(set(graph) | {t for targets in graph.values() for t in targets})
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found = []
+    for root in nodes:
+        if root in index:
             continue
-        found.update(n for n in names if n.split(".")[0] in PACKAGES)
-    return found
+        work = [(root, iter(sorted(graph.get(root, ()))))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, targets = work[-1]
+            for target in targets:
+                if target not in index:
+                    index[target] = low[target] = len(index)
+                    stack.append(target)
+                    on_stack.add(target)
+                    work.append((target, iter(sorted(graph.get(target, ())))))
+                    break
+                if target in on_stack:
+                    low[node] = min(low[node], index[target])
+            else:
+                work.pop()
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[node])
+                if low[node] == index[node]:
+                    component = []
+                    while True:
+                        member = stack.pop()
+                        on_stack.discard(member)
+                        component.append(member)
+                        if member == node:
+                            break
+                    if len(component) > 1:
+                        found.append(sorted(component))
+    return sorted(found)
 
 
 def test_every_module_has_a_layer():
@@ -127,13 +143,40 @@ def test_every_module_has_a_layer():
 
 
 def test_layer_of_examples():
-    assert LAYERS[layer_of("drake_sim.base.cli")][0] == "base"
-    assert LAYERS[layer_of("drake_sim.systems.sensors.imu")][0] == "systems"
-    assert LAYERS[layer_of("drake_sim.flip")][0] == "apps"
-    assert LAYERS[layer_of("planning.search.rrt")][0] == "planning: search"
-    assert LAYERS[layer_of("planning.benchmark")][0] == "apps"
+    def name(module):
+        return LAYERS[layer_of(module)][0]
+
+    assert name("drake_sim") == "base"
+    assert name("drake_sim.base.cli") == "base"
+    assert name("drake_sim.systems.sensors.imu") == "systems"
+    assert name("drake_sim.navigation.costmap") == "navigation: costmaps, planners, navigator"
+    assert name("planning.search.rrt") == "planning: search"
+    assert name("diagrams.flip") == "diagrams"
+    assert name("drake_sim.runs.recipe") == "runs: recipes and run harnesses"
+    assert name("drake_sim.flip") == "apps"
+    assert name("drake_sim.sweep.spec") == "apps"
+    assert name("drake_sim.tools.plan_benchmark") == "apps"
+    # planning.benchmark only forwards to the app (runpy, under __main__): part of planning,
+    # importing nothing of the project.
+    assert name("planning.benchmark") == "planning: tasks and the public API"
+    assert imported_modules("planning.benchmark", ROOT / "planning" / "benchmark.py") == set()
     with pytest.raises(KeyError):
         layer_of("somewhere.else")
+
+
+def test_apps_are_found_where_they_stand(tmp_path):
+    (tmp_path / "drake_sim").mkdir()
+    for name in ("__init__", "walle", "navigate"):
+        (tmp_path / "drake_sim" / f"{name}.py").write_text("")
+    assert app_prefixes(tmp_path) == (
+        "drake_sim.navigate",
+        "drake_sim.walle",
+        "drake_sim.sweep",
+        "drake_sim.tools",
+    )
+    apps = set(LAYERS[-1][1])
+    assert {"drake_sim.walle", "drake_sim.navigate", "drake_sim.pickplace"} <= apps
+    assert "drake_sim" not in apps and "drake_sim.runs" not in apps
 
 
 def violations() -> list[str]:
@@ -151,7 +194,7 @@ def test_no_import_runs_back_up_a_layer():
     assert violations() == []
 
 
-def test_the_check_catches_an_upward_import(tmp_path, monkeypatch):
+def test_the_check_catches_an_upward_import(tmp_path):
     """The check itself can fail: a systems module that imports a diagram is reported."""
     fake = tmp_path / "drake_sim" / "systems" / "bad.py"
     fake.parent.mkdir(parents=True)
@@ -159,6 +202,37 @@ def test_the_check_catches_an_upward_import(tmp_path, monkeypatch):
     found = imported_modules("drake_sim.systems.bad", fake)
     assert "diagrams.flip" in found
     assert layer_of("diagrams.flip") > layer_of("drake_sim.systems.bad")
+
+
+def test_no_two_modules_import_each_other():
+    assert cycles(import_graph()) == []
+
+
+def test_no_two_rooms_import_each_other():
+    assert cycles(room_graph(import_graph())) == []
+
+
+def test_the_loop_checks_catch_loops(tmp_path):
+    """Loops of two and of three are found, type-only imports count, and rooms loop when
+    modules in them do even if no two modules do."""
+    fake = tmp_path / "filter.py"
+    fake.write_text(
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n"
+        "    from drake_sim.systems.estimation.amcl import AmclConfig\n"
+    )
+    found = imported_modules("drake_sim.systems.estimation.filter", fake)
+    assert found == {"drake_sim.systems.estimation.amcl"}
+    graph = {
+        "a.x.one": {"a.x.two"},
+        "a.x.two": {"a.x.one", "b.y.one"},
+        "b.y.one": {"c.z.one"},
+        "c.z.one": {"b.y.two"},
+        "b.y.two": set(),
+    }
+    assert cycles(graph) == [["a.x.one", "a.x.two"]]
+    assert cycles(room_graph(graph)) == [["b.y", "c.z"]]
+    assert cycles({"p": {"q"}, "q": {"r"}, "r": {"p"}, "s": {"p"}}) == [["p", "q", "r"]]
 
 
 def test_library_never_imports_tests_or_benchmarks():

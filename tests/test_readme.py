@@ -28,6 +28,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+import drake_sim.runs.mapping as mapping_app
+from drake_sim.runs import command as run_command
+
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 DOCS = (README, *sorted((ROOT / "docs").glob("*.md")))
@@ -226,24 +229,21 @@ def _entry_module(command: Command):
         module = importlib.import_module(name)
     except Exception as e:
         raise _RefusedError(f"{name} fails to import: {_one_line(e)}") from None
-    if '__name__ == "__main__"' not in inspect.getsource(module):
+    source = inspect.getsource(module)
+    if '__name__ == "__main__"' not in source:
         raise _RefusedError(f"{name} runs nothing as a script (no __main__ block)")
-    return module
+    forwarded = re.search(r'runpy\.run_module\(\s*"([\w.]+)"', source)  # a name for another app
+    return importlib.import_module(forwarded.group(1)) if forwarded else module
 
 
 def _one_line(error: Exception) -> str:
     return f"{type(error).__name__}: {' '.join(str(error).split())}"
 
 
-_SCENARIO_CHECKS = {
-    "drake_sim.flip": lambda m, a: m.apply_overrides(m.load_flip_scenario(a.config), a.set),
-}
-"""How an app without a ``load_scenario(args)`` applies ``--set`` to its scenario."""
-
-
 def _load_scenario(module, args: argparse.Namespace):
-    """The scenario of an app's command line, as the app loads it (``--set`` applied)."""
-    return module.load_scenario(args)
+    """The inputs of an app's command line, as the app loads them (its recipe's one loader:
+    files, ``--set``, flags and seed; nothing built)."""
+    return run_command.load_from_args(module.RECIPE, args)
 
 
 def _placeholders(args: argparse.Namespace) -> list[Path]:
@@ -293,9 +293,7 @@ def _parse(module, args: list[str]) -> tuple[argparse.Namespace, argparse.Argume
                     raise _RefusedError(lines[-1] if lines else "main() returned before parsing")
             else:
                 raise _RefusedError(f"{module.__name__} has neither _parse_args nor main")
-            check = _SCENARIO_CHECKS.get(home.__name__)
-            if check is None and hasattr(home, "load_scenario"):
-                check = _load_scenario
+            check = _load_scenario if hasattr(home, "RECIPE") else None
             if check is not None and getattr(namespace, "set", None):
                 try:
                     check(home, namespace)
@@ -344,7 +342,8 @@ def _mapping_outputs(args) -> list[tuple[Path, bool]]:
     if out is None:
         arena = args.arena
         if arena is None:  # the scenario's
-            scenario = yaml.safe_load(Path(args.config).read_text())
+            path = args.scenario or mapping_app.RECIPE.scenario.default_file()
+            scenario = yaml.safe_load(Path(path).read_text())
             arena = scenario.get("arena") if isinstance(scenario, dict) else None
         if arena is None:
             return []
@@ -580,7 +579,7 @@ def test_unknown_modules_options_and_values_are_refused(tmp_path, monkeypatch):
         "`python -m drake_sim.sweep --address auto config/sweeps/flip_imu_noise.yaml`\n"
         "`python benchmarks/no_such_benchmark.py`\n"
         "`python benchmarks/flip_benchmark.py --no-such-option`\n"
-        "`python -m planning.regions --scene config/pickplace.yaml`\n"
+        "`python -m drake_sim.tools.regions --scene config/pickplace.yaml`\n"
         "`python -m drake_sim.flip --set flip.no_such_key=1`\n"
         "`python -m drake_sim.pickplace --set 'scene.object.position[7]=0.5'`\n"
         "`python -m drake_sim.pickplace --set 'scene.object.position[0]=0.55'`\n"

@@ -45,7 +45,7 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
     after whatever summary ``main`` prints when it catches them (a stop ``main`` lets through, in
     its set-up, gets a line of its own). Anything else is a bug and is raised.
     """
-    logging.getLogger("drake").setLevel(logging.WARNING)  # stderr is for errors: no INFO lines
+    quiet_drake_logger()
     try:
         with stop_on_signals():
             try:
@@ -60,6 +60,14 @@ def run(main: Callable[[Sequence[str] | None], int], argv: Sequence[str] | None 
     except ConfigError as e:
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)  # one line
         return EXIT_BAD_INPUT
+
+
+def quiet_drake_logger() -> None:
+    """Keeps Drake's INFO lines off stderr (stderr is for errors). pydrake sets its logger up
+    when it is first imported, so it is imported here first."""
+    import pydrake.common  # noqa: F401, PLC0415 (the import configures the "drake" logger)
+
+    logging.getLogger("drake").setLevel(logging.WARNING)
 
 
 def is_stop(error: BaseException) -> bool:
@@ -230,6 +238,19 @@ def input_file(what: str = "file") -> Callable[[str], Path]:
     return check
 
 
+def preset_or_file(what: str) -> Callable[[str], Path | str]:
+    """argparse type for a preset's name (``sick_tim571``: a word, returned as it is, for the
+    loader to find or refuse) or a file to read (a path, checked like ``input_file``)."""
+    check_file = input_file(f"{what} file")
+
+    def check(text: str) -> Path | str:
+        if text.replace("_", "").replace("-", "").isalnum() and not Path(text).is_file():
+            return text
+        return check_file(text)
+
+    return check
+
+
 def input_path(what: str = "path") -> Callable[[str], Path]:
     """argparse type for a file or folder to read: it exists and can be read."""
 
@@ -297,19 +318,6 @@ def write_text(path: Path, text: str, what: str = "file") -> None:
         ConfigError: the file cannot be written (one line naming it and why).
     """
     write_atomic(path, text, what)
-
-
-def add_robot_and_config_options(
-    parser: argparse.ArgumentParser, *, default_robot: Path, default_config: Path
-) -> None:
-    """Adds ``--robot FILE`` and ``--config FILE`` with these defaults (checked as
-    ``input_file``s when given)."""
-    parser.add_argument(
-        "--robot", type=input_file("robot file"), default=default_robot, help="robot YAML"
-    )
-    parser.add_argument(
-        "--config", type=input_file("scenario file"), default=default_config, help="scenario YAML"
-    )
 
 
 def announce(meshcat, doing: str) -> None:

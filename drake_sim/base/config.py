@@ -9,6 +9,13 @@ file and the dotted key path (``robot.model.ee_frame``). Range checks stay with 
 parameter paths of sweep files, are dotted names with list indices (``scene.object.position[0]``,
 ``pushes[1].force[2]``), read by ``parse_key_path``.
 
+Presets (``drake_sim.base.presets``): where a schema has a dataclass that declares a folder of
+presets (``LidarConfig.PRESETS = "lidars"``), a file or an override may give a string instead
+of its keys: a preset's name (``lidar: sick_tim571`` reads ``config/lidars/sick_tim571.yaml``)
+or the path of a YAML file. The preset replaces the whole section (every key, its defaults
+included); keys set after it (a later ``--set lidar.rate=10``) apply on top. An unknown name is
+a ``ConfigError`` naming the file, the key, the name and the known presets.
+
 Schemas are dataclasses (or Drake's own config structs) whose field types are read at run time,
 so a schema module must not use ``from __future__ import annotations``.
 """
@@ -24,6 +31,7 @@ import yaml
 from pydrake.common.yaml import yaml_load_typed
 
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.presets import preset_file
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
@@ -83,6 +91,14 @@ def load_typed(schema, *, filename=None, data: str | None = None, defaults=None,
         tree = {}
     if not isinstance(tree, dict):
         raise ConfigError(f"{where}: expected a mapping of keys, got {_kind(tree)}")
+    spans = {}
+    if _has_presets(schema):
+        _find_presets(schema, yaml.compose(text, Loader=_Loader), "", spans)
+    if spans:  # each preset string becomes the preset's mapping, in place; the rest is unchanged
+        for start, (end, kind, name, key) in sorted(spans.items(), reverse=True):
+            value = load_typed(kind, filename=preset_file(kind, name, f"{where}: '{key}'"))
+            text = text[:start] + _flow_yaml(_plain(value)) + text[end:]
+        tree = parse_yaml(text, where)
     check_tree(schema, tree, where)
     try:
         return yaml_load_typed(
@@ -107,6 +123,48 @@ def load_checked(schema, filename, check, *, what: str = "file", defaults=None):
     where = str(filename)
     value = load_typed(schema, data=read_text(filename, what), defaults=defaults, where=where)
     return check(value, where)
+
+
+def _has_presets(schema, seen=None) -> bool:
+    """Whether a dataclass with ``PRESETS`` can stand anywhere in ``schema``."""
+    seen = set() if seen is None else seen
+    if schema in seen:
+        return False
+    seen.add(schema)
+    fields = _fields(schema)
+    if fields is not None and getattr(schema, "PRESETS", None):
+        return True
+    kinds = list(fields.values()) if fields is not None else typing.get_args(schema)
+    return any(_has_presets(kind, seen) for kind in kinds)
+
+
+def _find_presets(kind, node, key: str, spans: dict) -> None:
+    """Adds ``start: (end, schema, name, key)`` to ``spans`` for each string in the composed
+    YAML ``node`` that stands where ``kind`` has a dataclass with ``PRESETS``."""
+    origin, args = typing.get_origin(kind), typing.get_args(kind)
+    fields = _fields(kind)
+    if origin in (typing.Union, types.UnionType):
+        for option in args:
+            _find_presets(option, node, key, spans)
+    elif fields is not None and isinstance(node, yaml.ScalarNode):
+        if getattr(kind, "PRESETS", None) and node.tag == "tag:yaml.org,2002:str":
+            spans[node.start_mark.index] = (node.end_mark.index, kind, node.value, key or "<root>")
+    elif fields is not None and isinstance(node, yaml.MappingNode):
+        for name_node, value_node in node.value:
+            if name_node.value in fields:
+                name = f"{key}.{name_node.value}" if key else name_node.value
+                _find_presets(fields[name_node.value], value_node, name, spans)
+    elif (origin in (list, tuple) or kind in (list, tuple)) and isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            _find_presets(args[0] if args else None, item, f"{key}[{i}]", spans)
+    elif (origin is dict or kind is dict) and args and isinstance(node, yaml.MappingNode):
+        for name_node, value_node in node.value:
+            _find_presets(args[1], value_node, f"{key}.{name_node.value}", spans)
+
+
+def _flow_yaml(data) -> str:
+    """``data`` as one line of flow-style YAML."""
+    return yaml.dump(data, Dumper=_Dumper, default_flow_style=True, width=1 << 30).strip()
 
 
 def parse_key_path(key: str, where: str = "key") -> tuple[str | int, ...]:
@@ -214,7 +272,7 @@ def _list_with_item(value, steps, first: int, text: str, where: str) -> str:
             node[step] = _merged(old, parse_yaml(text, where))
         else:
             node = node[step]
-    return yaml.dump(root, Dumper=_Dumper, default_flow_style=True, width=1 << 30).strip()
+    return _flow_yaml(root)
 
 
 def _merged(old, new):

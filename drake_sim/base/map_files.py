@@ -30,6 +30,7 @@ import numpy as np
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic_many
+from drake_sim.base.planar_grid import PlanarGrid
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 100
 PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN = 254, 0, 205
@@ -47,8 +48,9 @@ class MapFileError(ConfigError):
 
 
 @dc.dataclass(eq=False)
-class OccupancyMap:
-    """A 2D occupancy grid, ``nav_msgs/OccupancyGrid`` style (see the module docstring).
+class OccupancyMap(PlanarGrid):
+    """A 2D occupancy grid, ``nav_msgs/OccupancyGrid`` style (see the module docstring); its
+    cells and world points convert with ``PlanarGrid``'s methods (``cell_of``, ``centres``, ...).
 
     Attributes:
         cells: int8 (rows, cols): -1 unknown, 0 free, 100 occupied, in between allowed.
@@ -90,38 +92,9 @@ class OccupancyMap:
         """Extent along the rows (y of the origin's frame), m."""
         return self.cells.shape[0] * self.resolution
 
-    def cell_of(self, xy) -> tuple[np.ndarray, np.ndarray]:
-        """Returns (rows, cols), int arrays of the cells holding world points ``xy`` (..., 2) m.
-
-        Indices are not clipped: points outside the map give indices outside [0, shape).
-        """
-        local = self._to_local(np.asarray(xy, dtype=float))
-        cols = np.floor(local[..., 0] / self.resolution).astype(np.int64)
-        rows = np.floor(local[..., 1] / self.resolution).astype(np.int64)
-        return rows, cols
-
-    def inside(self, rows, cols) -> np.ndarray:
-        """Boolean mask: which (rows, cols) index a cell of the map."""
-        rows, cols = np.asarray(rows), np.asarray(cols)
-        return (rows >= 0) & (rows < self.shape[0]) & (cols >= 0) & (cols < self.shape[1])
-
     def value_at(self, xy, outside: int = UNKNOWN) -> np.ndarray:
         """Cell values (int8) at world points ``xy`` (..., 2) m; ``outside`` beyond the map."""
-        rows, cols = self.cell_of(xy)
-        ok = self.inside(rows, cols)
-        values = np.full(rows.shape, outside, dtype=np.int8)
-        values[ok] = self.cells[rows[ok], cols[ok]]
-        return values
-
-    def centres(self) -> tuple[np.ndarray, np.ndarray]:
-        """World coordinates (xs, ys), each (rows, cols) m, of every cell's centre."""
-        rows, cols = np.indices(self.shape, dtype=float)
-        local = np.stack([(cols + 0.5) * self.resolution, (rows + 0.5) * self.resolution], -1)
-        x0, y0, yaw = self.origin
-        c, s = math.cos(yaw), math.sin(yaw)
-        xs = x0 + c * local[..., 0] - s * local[..., 1]
-        ys = y0 + s * local[..., 0] + c * local[..., 1]
-        return xs, ys
+        return self.values_at(self.cells, xy, outside)
 
     def occupied(self, thresh: float = 0.65) -> np.ndarray:
         """Mask of cells whose value is at least ``thresh`` * 100."""
@@ -134,12 +107,6 @@ class OccupancyMap:
     def unknown(self) -> np.ndarray:
         """Mask of unknown cells (negative values)."""
         return self.cells < 0
-
-    def _to_local(self, xy: np.ndarray) -> np.ndarray:
-        x0, y0, yaw = self.origin
-        d = xy - np.array([x0, y0])
-        c, s = math.cos(yaw), math.sin(yaw)
-        return np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]], -1)
 
 
 def save_map(

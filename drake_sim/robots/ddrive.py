@@ -7,14 +7,9 @@ from pathlib import Path
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from drake_sim.base.resources import (
-    config_dir,
-    make_parser,
-    models_dir,
-    params_yaml_file,
-    render_xacro,
-)
+from drake_sim.base.resources import config_dir
 from drake_sim.robots.ddrive_params import RobotParams
+from drake_sim.robots.urdf_model import add_robot_urdf, render_robot_urdf
 
 ROBOT_XACRO = "ddrive/ddrive.urdf.xacro"
 """The robot's xacro, relative to ``models/``."""
@@ -35,18 +30,11 @@ def robot_urdf(params: RobotParams) -> Path:
     The parameters, with every optional key filled in, are written as YAML beside the cache
     and handed to the xacro, which reads them with ``xacro.load_yaml``.
     """
-    resolved = params_yaml_file("ddrive", params.to_dict())
-    return render_xacro(models_dir() / ROBOT_XACRO, {"robot_config": str(resolved)})
+    return render_robot_urdf(ROBOT_XACRO, "ddrive", params)
 
 
 def add_robot(
     plant: MultibodyPlant, params: RobotParams, *, name: str = "ddrive"
 ) -> ModelInstanceIndex:
     """Adds the robot to ``plant`` as a free body (not welded) and returns its model instance."""
-    parser = make_parser(plant)
-    parser.SetAutoRenaming(False)
-    urdf = robot_urdf(params).read_text()
-    (instance,) = parser.AddModelsFromString(
-        urdf.replace('<robot name="ddrive"', f'<robot name="{name}"', 1), "urdf"
-    )
-    return instance
+    return add_robot_urdf(plant, robot_urdf(params), "ddrive", name)

@@ -10,11 +10,9 @@ import dataclasses as dc
 import math
 from pathlib import Path
 
-import yaml
-
 from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.files import write_atomic
+from drake_sim.robots.params_common import RobotParamsBase, number_fields, write_params
 
 
 @dc.dataclass
@@ -45,9 +43,10 @@ class MotorParams:
 
 
 @dc.dataclass
-class RobotParams:
+class RobotParams(RobotParamsBase):
     """Dimensions and masses of the flipping diff-drive robot (SI units)."""
 
+    UNSCALED = ("motor",)  # ``scaled`` leaves the torque alone: the motors are the same.
     body: BodyParams = dc.field(default_factory=BodyParams)
     wheel: WheelParams = dc.field(default_factory=WheelParams)
     caster: CasterParams = dc.field(default_factory=CasterParams)
@@ -79,21 +78,6 @@ class RobotParams:
         """Mass of the whole robot (kg)."""
         return self.body.mass + 2 * self.wheel.mass + 2 * self.caster.mass
 
-    def scaled(self, *, length: float = 1.0, mass: float = 1.0) -> "RobotParams":
-        """Returns a copy with every length multiplied by ``length`` and every mass by ``mass``
-        (torque is left alone: the motors are the same)."""
-        b, w, c = self.body, self.wheel, self.caster
-        return RobotParams(
-            body=BodyParams(b.length * length, b.width * length, b.height * length, b.mass * mass),
-            wheel=WheelParams(w.radius * length, w.width * length, w.mass * mass, w.gap * length),
-            caster=CasterParams(c.radius * length, c.mass * mass),
-            motor=dc.replace(self.motor),
-        )
-
-    def to_dict(self) -> dict:
-        """Returns the parameters as plain nested dicts (the YAML layout)."""
-        return dc.asdict(self)
-
 
 _REQUIRED = {
     "body": ("length", "width", "height", "mass"),
@@ -124,15 +108,9 @@ def validate(params: RobotParams, filename: str = "robot") -> RobotParams:
     Raises:
         ConfigError: naming the first bad key.
     """
-    for section in dc.fields(params):
-        block = getattr(params, section.name)
-        for field in dc.fields(block):
-            value = getattr(block, field.name)
-            key = f"{section.name}.{field.name}"
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ConfigError(f"{filename}: '{key}' must be a number, got {value!r}")
-            if not math.isfinite(value) or value <= 0:
-                raise ConfigError(f"{filename}: '{key}' must be finite and > 0, got {value!r}")
+    for key, value in number_fields(params, filename):
+        if not math.isfinite(value) or value <= 0:
+            raise ConfigError(f"{filename}: '{key}' must be finite and > 0, got {value!r}")
     b, w, c = params.body, params.wheel, params.caster
     corner = math.hypot(b.length / 2 - params.axle_x, b.height / 2)  # axle to front corner
     if w.radius <= corner:
@@ -164,6 +142,5 @@ def load_robot_params(filename: str | Path) -> RobotParams:
     return validate(load_typed(RobotParams, data=text, where=name), name)
 
 
-def write_robot_params(params: RobotParams, filename: str | Path) -> None:
-    """Writes ``params`` as a complete robot YAML file."""
-    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")
+write_robot_params = write_params
+"""``write_robot_params(params, filename)``: writes ``params`` as a complete robot YAML file."""

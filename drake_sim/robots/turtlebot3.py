@@ -15,14 +15,9 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
-from drake_sim.base.resources import (
-    config_dir,
-    make_parser,
-    models_dir,
-    params_yaml_file,
-    render_xacro,
-)
+from drake_sim.base.resources import config_dir, models_dir
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
+from drake_sim.robots.urdf_model import add_robot_urdf, render_robot_urdf
 
 ROBOT_XACRO = "turtlebot3/turtlebot3.urdf.xacro"
 """The robot's xacro, relative to ``models/``."""
@@ -63,12 +58,9 @@ def robot_urdf(params: Turtlebot3Params) -> Path:
     The parameters are written as YAML beside the cache and handed to the xacro, which reads
     them with ``xacro.load_yaml``.
     """
-    mappings = {
-        "robot_config": str(params_yaml_file("turtlebot3", params.to_dict())),
-        # Named here so the cache key covers the shared macros too.
-        "solid_macros": str(models_dir() / SOLID_MACROS),
-    }
-    return render_xacro(models_dir() / ROBOT_XACRO, mappings)
+    # The shared macros are named so that the cache key covers them too.
+    macros = str(models_dir() / SOLID_MACROS)
+    return render_robot_urdf(ROBOT_XACRO, "turtlebot3", params, solid_macros=macros)
 
 
 def add_turtlebot3(
@@ -80,13 +72,7 @@ def add_turtlebot3(
     Its two actuators are ``left_wheel_motor`` and ``right_wheel_motor``, in that order. The
     plant needs a registered SceneGraph (the robot has visual and collision geometry).
     """
-    parser = make_parser(plant)
-    parser.SetAutoRenaming(False)
-    urdf = robot_urdf(params).read_text()
-    (instance,) = parser.AddModelsFromString(
-        urdf.replace('<robot name="turtlebot3"', f'<robot name="{name}"', 1), "urdf"
-    )
-    return instance
+    return add_robot_urdf(plant, robot_urdf(params), "turtlebot3", name)
 
 
 def start_pose(x: float, y: float, yaw: float) -> RigidTransform:

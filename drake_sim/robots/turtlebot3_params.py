@@ -13,14 +13,12 @@ default is NaN is required in the YAML.
 """
 
 import dataclasses as dc
+import functools
 import math
-from pathlib import Path
-
-import yaml
 
 from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.files import write_atomic
+from drake_sim.robots.params_common import RobotParamsBase, check_values, write_params
 
 
 @dc.dataclass
@@ -77,9 +75,10 @@ class MountParams:
 
 
 @dc.dataclass
-class Turtlebot3Params:
+class Turtlebot3Params(RobotParamsBase):
     """Dimensions, masses and limits of the TurtleBot3 Waffle (SI units)."""
 
+    UNSCALED = ("motor", "limits")  # ``scaled`` leaves the torque and the limits alone.
     body: ChassisParams = dc.field(default_factory=ChassisParams)
     wheel: DriveWheelParams = dc.field(default_factory=DriveWheelParams)
     caster: BallCasterParams = dc.field(default_factory=BallCasterParams)
@@ -127,48 +126,11 @@ class Turtlebot3Params:
         """Mass of the whole robot: chassis, wheels and casters (kg)."""
         return self.body.mass + 2 * self.wheel.mass + 2 * self.caster.mass
 
-    def scaled(self, *, length: float = 1.0, mass: float = 1.0) -> "Turtlebot3Params":
-        """Returns a copy with every length multiplied by ``length`` and every mass by ``mass``
-        (the motors' torque and the velocity limits are left alone)."""
-        out = dc.replace(self)
-        for section in dc.fields(self):
-            block = dc.replace(getattr(self, section.name))
-            if section.name not in ("motor", "limits"):
-                for field in dc.fields(block):
-                    factor = mass if field.name == "mass" else length
-                    setattr(block, field.name, getattr(block, field.name) * factor)
-            setattr(out, section.name, block)
-        return out
-
-    def to_dict(self) -> dict:
-        """Returns the parameters as plain nested dicts (the YAML layout)."""
-        return dc.asdict(self)
-
 
 # Fields that may be zero or negative: positions. Every other value must be > 0.
-_POSITIONS = {
-    "body": ("offset_x",),
-    "caster": ("x",),
-    "imu": ("x", "y"),
-    "camera": ("x", "y"),
-    "lidar": ("x", "y"),
-}
-
-
-def _check_values(params: Turtlebot3Params, filename: str) -> None:
-    for section in dc.fields(params):
-        block = getattr(params, section.name)
-        for field in dc.fields(block):
-            value = getattr(block, field.name)
-            key = f"{section.name}.{field.name}"
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ConfigError(f"{filename}: '{key}' must be a number, got {value!r}")
-            if math.isnan(value):
-                raise ConfigError(f"{filename}: missing key '{key}'")
-            if not math.isfinite(value):
-                raise ConfigError(f"{filename}: '{key}' must be finite, got {value!r}")
-            if value <= 0 and field.name not in _POSITIONS.get(section.name, ()):
-                raise ConfigError(f"{filename}: '{key}' must be > 0, got {value!r}")
+_POSITIONS = frozenset(
+    ("body.offset_x", "caster.x", "imu.x", "imu.y", "camera.x", "camera.y", "lidar.x", "lidar.y")
+)
 
 
 def _check_on_footprint(params: Turtlebot3Params, section: str, filename: str) -> None:
@@ -194,7 +156,7 @@ def validate(params: Turtlebot3Params, filename: str = "robot") -> Turtlebot3Par
     Raises:
         ConfigError: naming the first bad key.
     """
-    _check_values(params, filename)
+    check_values(params, filename, _POSITIONS)
     b, w, c = params.body, params.wheel, params.caster
     if params.plate_width <= 0:
         raise ConfigError(
@@ -249,16 +211,14 @@ def validate(params: Turtlebot3Params, filename: str = "robot") -> Turtlebot3Par
     return params
 
 
-def load_turtlebot3_params(filename: str | Path) -> Turtlebot3Params:
-    """Loads and validates a TurtleBot3 YAML file (see ``config/turtlebot3.yaml``).
+load_turtlebot3_params = functools.partial(
+    load_checked, Turtlebot3Params, check=validate, what="robot file"
+)
+"""``load_turtlebot3_params(filename)``: loads and validates a TurtleBot3 YAML file (see
+``config/turtlebot3.yaml``); a ``ConfigError`` names the file and the key for a missing or malformed
+file, unknown or missing keys, or a value that is not a finite number, is out of range or gives
+an impossible robot."""
 
-    Raises:
-        ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
-            that is not a finite number, is out of range or gives an impossible robot.
-    """
-    return load_checked(Turtlebot3Params, filename, validate, what="robot file")
-
-
-def write_turtlebot3_params(params: Turtlebot3Params, filename: str | Path) -> None:
-    """Writes ``params`` as a complete TurtleBot3 YAML file."""
-    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")
+write_turtlebot3_params = write_params
+"""``write_turtlebot3_params(params, filename)``: writes ``params`` as a complete TurtleBot3 YAML
+file."""

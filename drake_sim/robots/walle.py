@@ -35,13 +35,8 @@ from pydrake.multibody.tree import (
 from pydrake.systems.framework import OutputPortSelection
 from pydrake.systems.primitives import Linearize
 
-from drake_sim.base.resources import (
-    config_dir,
-    make_parser,
-    models_dir,
-    params_yaml_file,
-    render_xacro,
-)
+from drake_sim.base.resources import config_dir, models_dir
+from drake_sim.robots.urdf_model import add_robot_urdf, render_robot_urdf
 from drake_sim.robots.walle_params import WalleParams
 
 ROBOT_XACRO = "walle/walle.urdf.xacro"
@@ -80,13 +75,14 @@ def robot_urdf(params: WalleParams, *, support: bool = False) -> Path:
             xacro, which reads them with ``xacro.load_yaml``.
         support: the "follow" variant, with support casters front and rear.
     """
-    mappings = {
-        "robot_config": str(params_yaml_file("walle", params.to_dict())),
-        "support": "true" if support else "false",
-        # Named here so the cache key covers the shared macros too.
-        "solid_macros": str(models_dir() / SOLID_MACROS),
-    }
-    return render_xacro(models_dir() / ROBOT_XACRO, mappings)
+    return render_robot_urdf(
+        ROBOT_XACRO,
+        "walle",
+        params,
+        support="true" if support else "false",
+        # Named here so that the cache key covers the shared macros too.
+        solid_macros=str(models_dir() / SOLID_MACROS),
+    )
 
 
 def add_walle(
@@ -96,13 +92,7 @@ def add_walle(
 
     Its two actuators are ``left_wheel_motor`` and ``right_wheel_motor``, in that order.
     """
-    parser = make_parser(plant)
-    parser.SetAutoRenaming(False)
-    urdf = robot_urdf(params, support=support).read_text()
-    (instance,) = parser.AddModelsFromString(
-        urdf.replace('<robot name="walle"', f'<robot name="{name}"', 1), "urdf"
-    )
-    return instance
+    return add_robot_urdf(plant, robot_urdf(params, support=support), "walle", name)
 
 
 def make_planar_model(params: WalleParams) -> MultibodyPlant:

@@ -10,15 +10,13 @@ z up. A field whose default is NaN is required in the YAML.
 """
 
 import dataclasses as dc
+import functools
 import math
-from pathlib import Path
-
-import yaml
 
 from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.files import write_atomic
 from drake_sim.robots.ddrive_params import MotorParams, WheelParams  # The same parts.
+from drake_sim.robots.params_common import RobotParamsBase, check_values, write_params
 
 GRAVITY = 9.81  # m/s^2.
 
@@ -64,9 +62,10 @@ class CasterParams:
 
 
 @dc.dataclass
-class WalleParams:
+class WalleParams(RobotParamsBase):
     """Dimensions and masses of Wall-E, the self-balancing two-wheeler (SI units)."""
 
+    UNSCALED = ("pitch", "max_torque")  # ``scaled`` leaves the camera's tilt and torque alone.
     # The tall box, and the two wheels on one axle near its bottom.
     body: BodyParams = dc.field(default_factory=BodyParams)
     wheel: WheelParams = dc.field(default_factory=WheelParams)
@@ -114,42 +113,9 @@ class WalleParams:
         add ``2 * caster.mass``."""
         return self.body.mass + 2 * self.wheel.mass
 
-    def scaled(self, *, length: float = 1.0, mass: float = 1.0) -> "WalleParams":
-        """Returns a copy with every length multiplied by ``length`` and every mass by ``mass``
-        (the camera's pitch and the motors' torque are left alone)."""
-        out = dc.replace(self)
-        for section in dc.fields(self):
-            block = dc.replace(getattr(self, section.name))
-            for field in dc.fields(block):
-                factor = mass if field.name == "mass" else length
-                if field.name not in ("pitch", "max_torque"):
-                    setattr(block, field.name, getattr(block, field.name) * factor)
-            setattr(out, section.name, block)
-        return out
-
-    def to_dict(self) -> dict:
-        """Returns the parameters as plain nested dicts (the YAML layout)."""
-        return dc.asdict(self)
-
 
 # Fields that may be zero or negative: positions. Every other value must be > 0.
-_POSITIONS = {"imu": ("x", "y", "z"), "camera": ("x", "y", "z")}
-
-
-def _check_values(params: WalleParams, filename: str) -> None:
-    for section in dc.fields(params):
-        block = getattr(params, section.name)
-        for field in dc.fields(block):
-            value = getattr(block, field.name)
-            key = f"{section.name}.{field.name}"
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ConfigError(f"{filename}: '{key}' must be a number, got {value!r}")
-            if math.isnan(value):
-                raise ConfigError(f"{filename}: missing key '{key}'")
-            if not math.isfinite(value):
-                raise ConfigError(f"{filename}: '{key}' must be finite, got {value!r}")
-            if value <= 0 and field.name not in _POSITIONS.get(section.name, ()):
-                raise ConfigError(f"{filename}: '{key}' must be > 0, got {value!r}")
+_POSITIONS = frozenset(("imu.x", "imu.y", "imu.z", "camera.x", "camera.y", "camera.z"))
 
 
 def _check_inside_body(params: WalleParams, section: str, what: str, filename: str) -> None:
@@ -171,7 +137,7 @@ def validate(params: WalleParams, filename: str = "robot") -> WalleParams:
     Raises:
         ConfigError: naming the first bad key.
     """
-    _check_values(params, filename)
+    check_values(params, filename, _POSITIONS)
     b, w, c = params.body, params.wheel, params.caster
     if w.radius <= b.ground_clearance:
         raise ConfigError(
@@ -206,16 +172,12 @@ def validate(params: WalleParams, filename: str = "robot") -> WalleParams:
     return params
 
 
-def load_walle_params(filename: str | Path) -> WalleParams:
-    """Loads and validates a Wall-E YAML file (see ``config/walle.yaml``).
+load_walle_params = functools.partial(load_checked, WalleParams, check=validate, what="robot file")
+"""``load_walle_params(filename)``: loads and validates a Wall-E YAML file (see
+``config/walle.yaml``); a ``ConfigError`` names the file and the key for a missing or malformed
+file, unknown or missing keys, or a value that is not a finite number, is out of range or gives
+an impossible robot."""
 
-    Raises:
-        ConfigError: if the file is missing, malformed, has unknown or missing keys, or a value
-            that is not a finite number, is out of range or gives an impossible robot.
-    """
-    return load_checked(WalleParams, filename, validate, what="robot file")
-
-
-def write_walle_params(params: WalleParams, filename: str | Path) -> None:
-    """Writes ``params`` as a complete Wall-E YAML file."""
-    write_atomic(filename, yaml.safe_dump(params.to_dict(), sort_keys=False), "robot file")
+write_walle_params = write_params
+"""``write_walle_params(params, filename)``: writes ``params`` as a complete Wall-E YAML
+file."""

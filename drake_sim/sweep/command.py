@@ -8,8 +8,8 @@ from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.sweep.backends import BACKENDS, check_backend, make_backend
 from drake_sim.sweep.execute import execute, header, write_sweep_info
+from drake_sim.sweep.jobs import make_job
 from drake_sim.sweep.plot import plot_sweep
-from drake_sim.sweep.runners import make_job
 from drake_sim.sweep.spec import load_sweep, rollouts
 from drake_sim.sweep.summary import format_summary, summarize
 from drake_sim.sweep.table import TABLE_FILE, Table, read_rows

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+__all__ = ["axle_yaw_and_pitch", "up_sign"]
+
 
 def axle_yaw_and_pitch(R_WB: np.ndarray) -> tuple[float, float]:
     """Returns (yaw of the axle frame, body pitch about the axle), both in radians.
@@ -35,8 +37,3 @@ def axle_yaw_and_pitch(R_WB: np.ndarray) -> tuple[float, float]:
 def up_sign(R_WB: np.ndarray) -> float:
     """+1 when the body's z axis points up (upright), -1 when upside down."""
     return 1.0 if R_WB[2, 2] >= 0 else -1.0
-
-
-def wrap_angle(angle: float) -> float:
-    """Wraps an angle to [-pi, pi)."""
-    return (angle + math.pi) % (2 * math.pi) - math.pi

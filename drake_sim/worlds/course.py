@@ -27,6 +27,7 @@ import numpy as np
 
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.planar import wrap_angle_exact
 from drake_sim.base.resources import config_dir
 
 CLOSE_TOLERANCE = 0.01
@@ -172,7 +173,7 @@ class Projection:
     s: float  # m, arc length of F from the start.
     distance: float  # m, |p_WQ - p_WF|.
     offset: float  # m, signed: positive when Q is to the left of the line's direction.
-    heading: float  # rad, the line's direction at F from W's x axis, in (-pi, pi].
+    heading: float  # rad, the line's direction at F from W's x axis, in [-pi, pi).
     p_WF: np.ndarray  # (2,) m, F in the world frame.
 
 
@@ -206,7 +207,7 @@ class Centreline:
         clamped on an open path)."""
         s = s % self.length if self.closed else min(max(s, 0.0), self.length)
         p = np.array([np.interp(s, self.s, self.p_WP[:, k]) for k in range(2)])
-        return p, _wrap(float(np.interp(s, self.s, self.heading)))
+        return p, wrap_angle_exact(float(np.interp(s, self.s, self.heading)))
 
     def distances(self, p_WQ: np.ndarray) -> np.ndarray:
         """Returns the distance (m) from each of the (m, 2) points ``p_WQ`` to the line."""
@@ -228,7 +229,7 @@ class Centreline:
             s=float(self.s[i] + t * (self.s[i + 1] - self.s[i])),
             distance=distance,
             offset=math.copysign(distance, cross),
-            heading=_wrap(float(heading)),
+            heading=wrap_angle_exact(float(heading)),
             p_WF=foot,
         )
 
@@ -279,9 +280,3 @@ def centreline(course: Course, spacing: float = SAMPLE_SPACING) -> Centreline:
         curvature=rows[:, 4].copy(),
         closed=course.closed,
     )
-
-
-def _wrap(angle: float) -> float:
-    """Wraps an angle (rad) into (-pi, pi]."""
-    wrapped = math.remainder(angle, 2 * math.pi)
-    return math.pi if wrapped == -math.pi else wrapped

@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from planning.collision import sphere_kernel, trig
+from planning.collision import lane_geometry, sphere_kernel, trig
+from planning.collision.lane_geometry import centre_once, min_distance2, points, within
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, refresh_cache
 from planning.collision.trig import sincos_lanes
 
@@ -63,94 +64,6 @@ def batch_work(d, lanes=LANES):
         np.zeros((3, k), dtype=np.bool_),  # per lane: colliding, unknown, not finite
         np.zeros(len(d.group_step), dtype=np.int64),  # the batch that computed each group centre
     )
-
-
-@njit(cache=True, _nrt=False)
-def _points(T, s, p_B, k, out, row, lanes):
-    """out[row] = X_W,s p_B[k] for every lane (same arithmetic as ``sphere_kernel._point``)."""
-    x = p_B[k, 0]
-    y = p_B[k, 1]
-    z = p_B[k, 2]
-    for i in range(3):
-        r0 = T[s, 4 * i]
-        r1 = T[s, 4 * i + 1]
-        r2 = T[s, 4 * i + 2]
-        r3 = T[s, 4 * i + 3]
-        o = out[row, i]
-        for lane in range(lanes):
-            o[lane] = r0[lane] * x + r1[lane] * y + r2[lane] * z + r3[lane]
-
-
-@njit(cache=True, _nrt=False, inline="always")
-def _group_centre(T, d, g, groups, group_seen, now, lanes):
-    """groups[g] for every lane, unless this batch (``now``) has computed it already: group
-    centres on demand, as ``sphere_kernel._classify_one`` does (most groups are never needed)."""
-    if group_seen[g] != now:
-        _points(T, d.group_step[g], d.p_BG, g, groups, g, lanes)
-        group_seen[g] = now
-
-
-@njit(cache=True, _nrt=False, inline="always")
-def _within(p, r, reach2, gate, out, lanes):
-    """out[lane] = 1 where gate[lane] > 0 and the points p[:, lane] and r[:, lane] ((3, lanes)
-    each) are less than sqrt(reach2) apart, else 0; True when some lane is."""
-    found = False
-    for lane in range(lanes):
-        u = p[0, lane] - r[0, lane]
-        v = p[1, lane] - r[1, lane]
-        w = p[2, lane] - r[2, lane]
-        inside = gate[lane] > 0.0 and u * u + v * v + w * w < reach2
-        out[lane] = 1.0 if inside else 0.0
-        found |= inside
-    return found
-
-
-@njit(cache=True, _nrt=False)
-def _min_distance2(p, obj, best, lanes):
-    """best = min(best, squared distance from each lane's point p (3, lanes) to the object of
-    row ``obj``): ``sphere_kernel._distance2``'s arithmetic (adding a zero term is exact)."""
-    px = p[0]
-    py = p[1]
-    pz = p[2]
-    w0, w1, w2 = obj[1], obj[2], obj[3]
-    w3, w4, w5 = obj[4], obj[5], obj[6]
-    w6, w7, w8 = obj[7], obj[8], obj[9]
-    o0, o1, o2, s0, s1, s2 = obj[10], obj[11], obj[12], obj[13], obj[14], obj[15]
-    if obj[0] == 0.0:  # box
-        for lane in range(lanes):
-            x = px[lane]
-            y = py[lane]
-            z = pz[lane]
-            u = max(abs(w0 * x + w1 * y + w2 * z - o0) - s0, 0.0)
-            v = max(abs(w3 * x + w4 * y + w5 * z - o1) - s1, 0.0)
-            w = max(abs(w6 * x + w7 * y + w8 * z - o2) - s2, 0.0)
-            total = 0.0 + u * u
-            total += v * v
-            total += w * w
-            best[lane] = min(best[lane], total)
-    elif obj[0] == 1.0:  # cylinder along its z axis
-        for lane in range(lanes):
-            x = px[lane]
-            y = py[lane]
-            z = pz[lane]
-            u = w0 * x + w1 * y + w2 * z - o0
-            v = w3 * x + w4 * y + w5 * z - o1
-            w = w6 * x + w7 * y + w8 * z - o2
-            radial = max(np.sqrt(u * u + v * v) - s0, 0.0)
-            axial = max(abs(w) - s1, 0.0)
-            total = 0.0 + radial * radial
-            total += axial * axial
-            best[lane] = min(best[lane], total)
-    else:  # sphere
-        for lane in range(lanes):
-            x = px[lane]
-            y = py[lane]
-            z = pz[lane]
-            u = w0 * x + w1 * y + w2 * z - o0
-            v = w3 * x + w4 * y + w5 * z - o1
-            w = w6 * x + w7 * y + w8 * z - o2
-            gap = max(np.sqrt(u * u + v * v + w * w) - s0, 0.0)
-            best[lane] = min(best[lane], gap * gap)
 
 
 @njit(cache=True, _nrt=False)
@@ -279,7 +192,7 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
                     for lane in range(lanes):
                         out[lane] = r0[lane] * x0[lane] + r1[lane] * x1[lane] + r2[lane] * x2[lane]
     for body in range(len(d.body_step)):
-        _points(T, d.body_step[body], d.p_BL, body, bodies, body, lanes)
+        points(T, d.body_step[body], d.p_BL, body, bodies, body, lanes)
     # Objects near each body in some lane: the box around the body's centre in every lane
     # against each object's axis-aligned box, within the body's reach (a superset of the objects
     # near it lane by lane, whose tests below count only for the lanes within reach; 6 tests an
@@ -320,10 +233,10 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         if count_near == 0:
             continue
         g = d.env_group[e]
-        _group_centre(T, d, g, groups, group_seen, now, lanes)
+        centre_once(T, d.group_step, d.p_BG, g, groups, group_seen, now, lanes)
         dist[:lanes] = np.inf
         for i in range(count_near):
-            _min_distance2(groups[g], objects[near[body, i]], dist, lanes)
+            min_distance2(groups[g], objects[near[body, i]], dist, lanes)
         reach2 = d.env_reach2[e]
         any_near = False
         for lane in range(lanes):
@@ -336,12 +249,10 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
             if d.env_out[e, k] < 0.0:
                 continue
             c = d.env_member[e, k]
-            if seen[c] != now:
-                _points(T, d.sphere_step[c], d.p_BS, c, centres, c, lanes)
-                seen[c] = now
+            centre_once(T, d.sphere_step, d.p_BS, c, centres, seen, now, lanes)
             best[:lanes] = np.inf
             for i in range(count_near):
-                _min_distance2(centres[c], objects[near[body, i]], best, lanes)
+                min_distance2(centres[c], objects[near[body, i]], best, lanes)
             inner2 = d.env_in[e, k]
             outer2 = d.env_out[e, k]
             for lane in range(lanes):
@@ -375,24 +286,22 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
             ga = d.pair_group[k, 0]
             if ga != last:
                 last = ga
-                _group_centre(T, d, ga, groups, group_seen, now, lanes)
+                centre_once(T, d.group_step, d.p_BG, ga, groups, group_seen, now, lanes)
                 reach2 = d.pair_side_reach2[k]
-                side_near = _within(groups[ga], bodies[b_body], reach2, mask, side_mask, lanes)
+                side_near = within(groups[ga], bodies[b_body], reach2, mask, side_mask, lanes)
             if not side_near:
                 continue
             gb = d.pair_group[k, 1]
-            _group_centre(T, d, gb, groups, group_seen, now, lanes)
-            if not _within(groups[ga], groups[gb], d.pair_reach2[k], side_mask, pair_mask, lanes):
+            centre_once(T, d.group_step, d.p_BG, gb, groups, group_seen, now, lanes)
+            if not within(groups[ga], groups[gb], d.pair_reach2[k], side_mask, pair_mask, lanes):
                 continue
             for n in range(d.pair_a.shape[1]):
                 if d.pair_out[k, n] < 0.0:
                     continue
                 i = d.pair_a[k, n]
                 j = d.pair_b[k, n]
-                for c in (i, j):
-                    if seen[c] != now:
-                        _points(T, d.sphere_step[c], d.p_BS, c, centres, c, lanes)
-                        seen[c] = now
+                centre_once(T, d.sphere_step, d.p_BS, i, centres, seen, now, lanes)
+                centre_once(T, d.sphere_step, d.p_BS, j, centres, seen, now, lanes)
                 inner2 = d.pair_in[k, n]
                 outer2 = d.pair_out[k, n]
                 for lane in range(lanes):
@@ -432,9 +341,15 @@ def classify_many(qs, d):
     return out
 
 
-# Numba keys a cached function on its own file alone; these compile ``trig``'s code into theirs.
+# Numba keys a cached function on its own file alone; these compile ``trig``'s and
+# ``lane_geometry``'s code into theirs.
 refresh_cache(
     sys.modules[__name__],
-    [Path(__file__), Path(sphere_kernel.__file__), Path(trig.__file__)],
+    [
+        Path(__file__),
+        Path(sphere_kernel.__file__),
+        Path(trig.__file__),
+        Path(lane_geometry.__file__),
+    ],
     Path(classify_many._cache._cache_path),
 )

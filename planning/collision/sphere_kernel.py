@@ -37,6 +37,11 @@ numba's cache folder when that is read-only): the first call in a fresh install 
 10 s, later processes load it in ~0.5 s. One entry point (``prefixes``; ``transforms`` for
 kinematics alone) keeps that short: each compiled entry point costs its own optimisation.
 ``announce_compile`` says so on stderr, once per process, when that compile is about to happen.
+
+A compiled kernel module, longer than the project's 400 lines: numba keys a cached function on
+its own file alone, so every module that compiles this kernel's code into its own lists the
+files that code comes from (``refresh_cache``); the data layout (``KernelData``, ``pack``), the
+kinematics and the classification that all those callers inline stay in this one file.
 """
 
 from __future__ import annotations
@@ -85,7 +90,7 @@ class KernelData(NamedTuple):
     an axis-aligned box around it.
     Speeds: ``speed`` (L, 7), a bound on how fast any point the checks use on each body (a
     sphere's, a group's or the body's bounding centre) moves per rad of each arm joint, m/rad,
-    in any configuration (``spheres.speed_table``; inf: no bound, so no certificates).
+    in any configuration (``sphere_arrays.speed_table``; inf: no bound, so no certificates).
     Roots, for the certificates' clearances: ``env_reach``, ``env_out_root``,
     ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, ``pair_side_reach``, the square
     roots of ``env_reach2``, ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out``,
@@ -257,23 +262,26 @@ def _pose_chain_lanes(full, sines, cosines, parent, kind, q_index, terms, T):
 
 
 @njit(cache=True, _nrt=False, inline="always")
+def _row(m, i, a, b):
+    """Row i of a step's X_PC = A + a B + b C (``m`` = ``terms[s]``), four scalars; inlined
+    with i a constant, so ``_step`` runs the twelve sums written out."""
+    return (
+        m[0, i, 0] + a * m[1, i, 0] + b * m[2, i, 0],
+        m[0, i, 1] + a * m[1, i, 1] + b * m[2, i, 1],
+        m[0, i, 2] + a * m[1, i, 2] + b * m[2, i, 2],
+        m[0, i, 3] + a * m[1, i, 3] + b * m[2, i, 3],
+    )
+
+
+@njit(cache=True, _nrt=False, inline="always")
 def _step(s, a, b, parent, terms, T):
     """T[s] = X_WC of step s = T[parent] (A + a B + b C), written out entry by entry (the
     step's X_PC in twelve scalars, then X_WP X_PC): the loop over a tuple picked by index
     that it replaced took ~12 % longer (the kinematics alone, timed over MBM samples)."""
     m = terms[s]
-    m00 = m[0, 0, 0] + a * m[1, 0, 0] + b * m[2, 0, 0]
-    m01 = m[0, 0, 1] + a * m[1, 0, 1] + b * m[2, 0, 1]
-    m02 = m[0, 0, 2] + a * m[1, 0, 2] + b * m[2, 0, 2]
-    m03 = m[0, 0, 3] + a * m[1, 0, 3] + b * m[2, 0, 3]
-    m10 = m[0, 1, 0] + a * m[1, 1, 0] + b * m[2, 1, 0]
-    m11 = m[0, 1, 1] + a * m[1, 1, 1] + b * m[2, 1, 1]
-    m12 = m[0, 1, 2] + a * m[1, 1, 2] + b * m[2, 1, 2]
-    m13 = m[0, 1, 3] + a * m[1, 1, 3] + b * m[2, 1, 3]
-    m20 = m[0, 2, 0] + a * m[1, 2, 0] + b * m[2, 2, 0]
-    m21 = m[0, 2, 1] + a * m[1, 2, 1] + b * m[2, 2, 1]
-    m22 = m[0, 2, 2] + a * m[1, 2, 2] + b * m[2, 2, 2]
-    m23 = m[0, 2, 3] + a * m[1, 2, 3] + b * m[2, 2, 3]
+    m00, m01, m02, m03 = _row(m, 0, a, b)
+    m10, m11, m12, m13 = _row(m, 1, a, b)
+    m20, m21, m22, m23 = _row(m, 2, a, b)
     p = parent[s]
     out = T[s]
     if p < 0:
@@ -301,6 +309,16 @@ def _point(T, s, p_B, k, out, row):
     z = p_B[k, 2]
     for i in range(3):
         out[row, i] = T[s, i, 0] * x + T[s, i, 1] * y + T[s, i, 2] * z + T[s, i, 3]
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _point_once(T, steps, p_B, k, out, seen, now):
+    """``_point`` of point k on step steps[k], unless this check (``now``) has computed it
+    already (``seen[k]``): the groups' and spheres' centres on demand (most are never needed).
+    Inlined: the same code as written out where it is called."""
+    if seen[k] != now:
+        _point(T, steps[k], p_B, k, out, k)
+        seen[k] = now
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -390,8 +408,8 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
     The radius is each test's clearance (the distance beyond its threshold: body, group or
     sphere against the objects, and body, group or sphere pairs) over the speed bound of what
     it compares; the distance to a convex object changes no faster than the point moves. The
-    innermost loops are written out: small helpers there (a sphere centre on demand, the
-    three-way verdict) measured twice as slow."""
+    centres on demand (``_point_once``) are inlined where they are needed, the same code as
+    written out: as calls, they measured twice as slow."""
     for k in range(len(q)):
         if not np.isfinite(q[k]):
             return UNKNOWN, 0.0  # never proven free: comparisons with NaN are all false
@@ -447,15 +465,13 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
         if count == 0:
             continue
         g = d.env_group[e]
-        if group_seen[g] != now:  # group centres on demand: many are never needed
-            _point(T, d.group_step[g], d.p_BG, g, groups, g)
-            group_seen[g] = now
+        _point_once(T, d.group_step, d.p_BG, g, groups, group_seen, now)
         # The least squared distance to the near objects, or a lower bound of it that proves
         # the group out of reach: an object's axis-aligned box first (no rotation), its exact
         # distance only when the box comes within reach (per-problem median 0.983x on MBM,
         # the same paths; ``benchmarks/planner_ab.py``). A bound gives a smaller radius, still
         # a safe one; the box holds the object up to rounding, which the thresholds' margin
-        # (``spheres._MARGIN``) covers.
+        # (``sphere_arrays.MARGIN``) covers.
         x = groups[g, 0]
         y = groups[g, 1]
         z = groups[g, 2]
@@ -473,9 +489,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
             if d.env_out[e, m] < 0.0:
                 continue
             c = d.env_member[e, m]
-            if seen[c] != now:
-                _point(T, d.sphere_step[c], d.p_BS, c, centres, c)
-                seen[c] = now
+            _point_once(T, d.sphere_step, d.p_BS, c, centres, seen, now)
             best = np.inf
             for i in range(count):
                 o = near[b, i]
@@ -505,9 +519,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
             g = d.pair_group[k, 0]
             if g != last:
                 last = g
-                if group_seen[g] != now:
-                    _point(T, d.group_step[g], d.p_BG, g, groups, g)
-                    group_seen[g] = now
+                _point_once(T, d.group_step, d.p_BG, g, groups, group_seen, now)
                 gap2 = _gap2(groups, g, bodies, b_body)
                 side_far = gap2 >= d.pair_side_reach2[k]
                 if side_far and speed > 0.0:
@@ -515,9 +527,7 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
             if side_far:
                 continue
             h = d.pair_group[k, 1]
-            if group_seen[h] != now:
-                _point(T, d.group_step[h], d.p_BG, h, groups, h)
-                group_seen[h] = now
+            _point_once(T, d.group_step, d.p_BG, h, groups, group_seen, now)
             gap2 = _gap2(groups, g, groups, h)
             if gap2 >= d.pair_reach2[k]:
                 if speed > 0.0:
@@ -528,10 +538,8 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
                     continue
                 i = d.pair_a[k, m]
                 j = d.pair_b[k, m]
-                for c in (i, j):
-                    if seen[c] != now:
-                        _point(T, d.sphere_step[c], d.p_BS, c, centres, c)
-                        seen[c] = now
+                _point_once(T, d.sphere_step, d.p_BS, i, centres, seen, now)
+                _point_once(T, d.sphere_step, d.p_BS, j, centres, seen, now)
                 u = centres[i, 0] - centres[j, 0]
                 v = centres[i, 1] - centres[j, 1]
                 w = centres[i, 2] - centres[j, 2]

@@ -14,6 +14,8 @@ machine.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -24,28 +26,27 @@ _PIO2_2 = -8.705515692000731e-10  # the next 30 bits
 _PIO2_3 = -3.50343439808993e-19  # the rest, to a double
 
 
+# Taylor coefficients, highest degree first: sin r = r + r z S(z) with S's from 1/17! to -1/3!,
+# cos r = 1 - z C(z) with C's from 1/18! to 1/2! (z = r^2). Each is the double nearest to it:
+# the factorials are exact in a double.
+_SIN = tuple((-1.0) ** k / math.factorial(2 * k + 1) for k in range(8, 0, -1))
+_COS = tuple((-1.0) ** (k + 1) / math.factorial(2 * k) for k in range(9, 0, -1))
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _horner(z, coefficients):
+    """The polynomial with ``coefficients`` (highest degree first) at z, by Horner's rule."""
+    total = coefficients[0]
+    for k in range(1, len(coefficients)):
+        total = total * z + coefficients[k]
+    return total
+
+
 @njit(cache=True, _nrt=False)
 def _kernel(r):
     """(sin r, cos r) for |r| <= pi/4 (plus a rounding): Horner sums of the Taylor series."""
     z = r * r
-    s = 1.0 / 355687428096000.0  # 1/17!
-    s = s * z - 1.0 / 1307674368000.0
-    s = s * z + 1.0 / 6227020800.0
-    s = s * z - 1.0 / 39916800.0
-    s = s * z + 1.0 / 362880.0
-    s = s * z - 1.0 / 5040.0
-    s = s * z + 1.0 / 120.0
-    s = s * z - 1.0 / 6.0
-    c = 1.0 / 6402373705728000.0  # 1/18!
-    c = c * z - 1.0 / 20922789888000.0
-    c = c * z + 1.0 / 87178291200.0
-    c = c * z - 1.0 / 479001600.0
-    c = c * z + 1.0 / 3628800.0
-    c = c * z - 1.0 / 40320.0
-    c = c * z + 1.0 / 720.0
-    c = c * z - 1.0 / 24.0
-    c = c * z + 0.5
-    return r + r * z * s, 1.0 - z * c
+    return r + r * z * _horner(z, _SIN), 1.0 - z * _horner(z, _COS)
 
 
 @njit(cache=True, _nrt=False)

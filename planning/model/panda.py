@@ -22,9 +22,9 @@ from pydrake.planning import RobotDiagram, RobotDiagramBuilder
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import make_parser
-from planning.config import PandaModelConfig, TableConfig
 from planning.model.assets import panda_urdf, read_srdf
 from planning.model.layout import NUM_ARM_JOINTS
+from planning.model.panda_config import PandaModelConfig, TableConfig
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 """The seven arm joints, base to flange."""

@@ -26,6 +26,11 @@ setting UNKNOWN samples aside for Drake's checker.
 seed gives the same path on any machine); then, or when the fine check finds a collision, the
 Python pipeline takes over, with Drake for what the spheres cannot decide. Random numbers come
 from an xorshift64* generator seeded with SplitMix64, so they are the same on every machine.
+
+A compiled kernel module, longer than the project's 400 lines: the whole search is compiled into
+one entry point (``solve``; ``plan`` and ``fine_check`` for the Python pipeline), and numba keys
+its cache on this file and the files it lists (``refresh_cache`` at the end), so the search's
+steps stay together here rather than in more files for every entry point to list.
 """
 
 from __future__ import annotations
@@ -37,7 +42,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from planning.collision import hull_kernel, sphere_batch, sphere_kernel, trig
+from planning.collision import hull_kernel, lane_geometry, sphere_batch, sphere_kernel, trig
 from planning.collision.hull_kernel import hull_free, hull_scratch, unpack_hulls
 from planning.collision.sphere_batch import FULL, classify_batch
 from planning.collision.sphere_kernel import (
@@ -240,29 +245,16 @@ def _free(q_a, q_b, step, d, scratch, end_known=False):
 
 
 @njit(cache=True)
-def _rrt_connect(
-    q_start,
-    q_goal,
-    lower,
-    upper,
-    d,
-    step,
-    edge_step,
-    goal_bias,
-    max_checks,
-    rng,
-    scratch,
-    balance,
-    domain,
-    domain_min,
-):
-    """RRT-Connect; returns (found, path). With ``balance`` the smaller tree is extended
+def _rrt_connect(q_start, q_goal, lower, upper, d, settings, scratch):
+    """RRT-Connect (``settings``: ``plan``'s); returns (found, path). With ``balance`` the
+    smaller tree is extended
     (the start tree on a tie), else the trees take turns. ``domain`` (rad; inf: off) is
     dynamic-domain sampling: a node whose extension failed gets that radius (later failures
     shrink it by 1e-4, down to ``domain_min``; successes grow it as much) and a target farther
     than its nearest node's radius is drawn again without a check. Such rejections count
     against ``max_checks`` too, by the nearest-node scan they cost (an eighth of a check, and
     another eighth per 128 nodes scanned), so that the budget still bounds the time."""
+    edge_step, step, goal_bias, max_checks, _, rng, _, balance, domain, domain_min = settings
     dim = len(q_start)
     counter = scratch[3]
     nodes = [np.empty((256, dim)), np.empty((256, dim))]
@@ -531,23 +523,7 @@ def make_scratch(d, dim, anchors, anchor_radius):
 
 
 @njit(cache=True)
-def plan(
-    q_start,
-    q_goal,
-    lower,
-    upper,
-    d,
-    edge_step,
-    step,
-    goal_bias,
-    max_checks,
-    iterations,
-    rng,
-    anchor_radius,
-    balance,
-    domain,
-    domain_min,
-):
+def plan(q_start, q_goal, lower, upper, d, settings):
     """Searches a path between two configurations the caller has checked (neither is
     classified again), edges checked at ``edge_step``; ``fine_check`` checks it finely.
 
@@ -555,22 +531,26 @@ def plan(
         q_start, q_goal: (7,) rad.
         lower, upper: the arm's joint limits (7,), rad.
         d: the sphere model's ``KernelData``.
-        edge_step: the search's edge resolution, rad.
-        step: RRT-Connect's largest extension, rad.
-        goal_bias: probability of sampling the other tree's root.
-        max_checks: classified configurations before giving up.
-        iterations: random shortcut attempts.
-        rng: the generator's state (``seed_state``), advanced.
-        anchor_radius: rad; samples the spheres cannot decide within this distance of the
-            start or the goal count as free (``edge_prefix``): the fine check asks Drake.
-        balance, domain, domain_min: RRT-Connect's tree balancing and dynamic domain
-            (``_rrt_connect``; ``RrtConnectOptions``).
+        settings: the search's settings, one tuple passed on as it is (a plain tuple: numba
+            types it as fast as separate arguments, a NamedTuple took 2 us more a call):
+
+            - edge_step: the search's edge resolution, rad;
+            - step: RRT-Connect's largest extension, rad;
+            - goal_bias: probability of sampling the other tree's root;
+            - max_checks: classified configurations before giving up;
+            - iterations: random shortcut attempts;
+            - rng: the generator's state (``seed_state``), advanced;
+            - anchor_radius: rad; samples the spheres cannot decide within this distance of
+              the start or the goal count as free (``edge_prefix``): the fine check asks Drake;
+            - balance, domain, domain_min: RRT-Connect's tree balancing and dynamic domain
+              (``_rrt_connect``; ``RrtConnectOptions``).
 
     Returns:
         (status, path, how, checks): FOUND with the path, or GAVE_UP (no path);
         ``how`` 0 the straight line, 1 RRT-Connect and shortcutting; ``checks`` the
         configurations classified.
     """
+    edge_step, _, _, _, iterations, rng, anchor_radius, _, _, _ = settings
     dim = len(q_start)
     anchors = np.empty((2, dim))
     anchors[0] = q_start
@@ -583,22 +563,7 @@ def plan(
     path[1] = q_goal
     if _free(q_start, q_goal, edge_step, d, scratch):
         return FOUND, path, 0, counter[0]
-    found, path = _rrt_connect(
-        q_start,
-        q_goal,
-        lower,
-        upper,
-        d,
-        step,
-        edge_step,
-        goal_bias,
-        max_checks,
-        rng,
-        scratch,
-        balance,
-        domain,
-        domain_min,
-    )
+    found, path = _rrt_connect(q_start, q_goal, lower, upper, d, settings, scratch)
     if not found:
         return GAVE_UP, empty, 1, counter[0]
     return FOUND, _shortcut(path, iterations, edge_step, d, rng, scratch), 1, counter[0]
@@ -614,16 +579,7 @@ def solve(
     ints,
     hull_floats,
     hull_ints,
-    edge_step,
-    step,
-    goal_bias,
-    max_checks,
-    iterations,
-    rng,
-    anchor_radius,
-    balance,
-    domain,
-    domain_min,
+    settings,
     check_ends,
     fine_step,
 ):
@@ -663,23 +619,7 @@ def solve(
         checks = counter[0]
         if unproven:
             return ENDS_UNPROVEN, np.empty((0, dim)), 0, checks, unproven, -1, unknown, segment
-    status, path, how, searched = plan(
-        q_start,
-        q_goal,
-        lower,
-        upper,
-        d,
-        edge_step,
-        step,
-        goal_bias,
-        max_checks,
-        iterations,
-        rng,
-        anchor_radius,
-        balance,
-        domain,
-        domain_min,
-    )
+    status, path, how, searched = plan(q_start, q_goal, lower, upper, d, settings)
     checks += searched
     bad = -1
     if status == FOUND and fine_step > 0.0:
@@ -739,13 +679,13 @@ def warm_up_steps(data, lower, upper, hulls=NO_HULLS) -> list:
     """``warm_up`` as named steps ``(name, callable)``, one per compiled entry point, for a
     build that reports its progress (``planning.planner_kernels``)."""
     q = np.ascontiguousarray((lower + upper) / 2.0)
-    tail = (0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
+    settings = (0.1, 1.0, 0.05, 1, 0, seed_state(0), 0.0, True, np.inf, 1.0)
     return [
         (
             "the compiled search",
-            lambda: solve(q, q, lower, upper, *pack(data), *hulls, *tail, True, 0.01),
+            lambda: solve(q, q, lower, upper, *pack(data), *hulls, settings, True, 0.01),
         ),
-        ("the Python pipeline's search", lambda: plan(q, q, lower, upper, data, *tail)),
+        ("the Python pipeline's search", lambda: plan(q, q, lower, upper, data, settings)),
         ("the fine check", lambda: fine_check(np.vstack([q, q]), 0.01, data, *hulls)),
     ]
 
@@ -757,6 +697,7 @@ refresh_cache(
         Path(__file__),
         Path(sphere_kernel.__file__),
         Path(sphere_batch.__file__),
+        Path(lane_geometry.__file__),
         Path(trig.__file__),
         Path(hull_kernel.__file__),
     ],

@@ -241,11 +241,9 @@ class JointPathSearch:
 
         def arguments(edge_step, step, anchor_radius, kernel=(data,)):
             # By position: numba's dispatch of keyword arguments costs ~0.5 ms a call.
-            # ``kernel``: the KernelData (``plan``) or its two packed buffers (``solve``).
-            return (
-                lower,
-                upper,
-                *kernel,
+            # ``kernel``: the KernelData (``plan``) or its two packed buffers (``solve``); then
+            # the search's settings, one tuple (``compiled_rrt.plan``).
+            settings = (
                 edge_step,
                 step,
                 opts.rrt.goal_bias,
@@ -257,6 +255,7 @@ class JointPathSearch:
                 opts.rrt.dynamic_domain or np.inf,
                 opts.rrt.dynamic_domain_min,
             )
+            return (lower, upper, *kernel, settings)
 
         search = (spheres.search_resolution, opts.rrt.step, spheres.anchor_radius)
         q_start = np.asarray(q_start, dtype=float)

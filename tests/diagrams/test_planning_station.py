@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import diagrams.planning_station as mut
-from diagrams.panda_station_systems import box_pose
 from diagrams.pickplace_scenario import load_pickplace_scenario
+from diagrams.scene_boxes import box_pose
 from drake_sim.base.errors import ConfigError
 
 

@@ -5,6 +5,7 @@ import json
 import pytest
 
 import drake_sim.navigate as mut
+import drake_sim.runs.navigate as navigate_app
 from drake_sim.base import cli
 from tests import navigation_helpers as nh
 from tests.cli_helpers import assert_bad_input, run_module
@@ -114,11 +115,11 @@ class _FakePanel:
 
 
 def test_goals_from_the_page_with_a_viewer(room_map, tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(mut, "GoalPanel", _FakePanel)
+    monkeypatch.setattr(navigate_app, "GoalPanel", _FakePanel)
     # The page's goals are under test, not the pacing: simulate flat out.
-    flat_out = mut.NavigationRun
+    flat_out = navigate_app.NavigateRun
     monkeypatch.setattr(
-        mut, "NavigationRun", lambda *a, **k: flat_out(*a, **{**k, "realtime": False})
+        navigate_app, "NavigateRun", lambda *a, **k: flat_out(*a, **{**k, "realtime": False})
     )
     report_file = tmp_path / "report.json"
     args = ["--map", str(room_map), "--duration", "15", "--report", str(report_file)]

@@ -2,16 +2,15 @@
 follows every shipped course with robots of other sizes and masses than config/walle.yaml's.
 Headless, simulated time, seeded IMU noise."""
 
-import dataclasses as dc
+import json
 
 import pytest
 
-from drake_sim.robots.walle_params import load_walle_params, write_walle_params
-from drake_sim.walle_run import WalleCourseRun
-from drake_sim.worlds.course import load_course, shipped_courses
-from tests.walle_course_helpers import walle_robot_and_scenario
+from drake_sim.robots.walle_params import write_walle_params
+from drake_sim.runs.walle import RECIPE
+from drake_sim.worlds.course import shipped_courses
 
-robot, scenario = walle_robot_and_scenario()
+robot = RECIPE.load().robot  # config/walle.yaml
 
 # Known failure (strict, so a fix shows up as XPASS): the 1.25x robot's camera, 0.44 m up, sees
 # past the oval's, the S-bend's and the loop's 0.5 m of floor in the turns; the detector takes
@@ -39,8 +38,8 @@ def test_scaled_robots_balance_and_follow_every_shipped_course(tmp_path, length,
     full lap on a loop), no fall, within 5 cm of the line at worst and 1.5 cm on average."""
     robot_file = tmp_path / "walle.yaml"
     write_walle_params(robot.scaled(length=length, mass=mass), robot_file)
-    course = load_course(path)
-    run = WalleCourseRun(dc.replace(scenario, mode="both"), load_walle_params(robot_file), course)
+    overrides = ["mode=both", f"course={json.dumps(str(path))}"]
+    run = RECIPE.start(robot=robot_file, overrides=overrides)
     run.run(run.default_duration(viewer=False))
     report = run.report()
     print(
@@ -51,6 +50,6 @@ def test_scaled_robots_balance_and_follow_every_shipped_course(tmp_path, length,
     )
     assert not report.fell
     assert report.course_fraction == 1.0 and report.laps >= 1
-    assert report.end == ("lap" if course.closed else "finish")
+    assert report.end == ("lap" if run.course.closed else "finish")
     assert report.max_line_offset_m <= 0.05
     assert report.mean_line_offset_m <= 0.015

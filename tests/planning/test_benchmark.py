@@ -1,204 +1,28 @@
-"""python -m planning.benchmark: one MBM problem end to end, the report rows, where the problems
-come from (pip mocked), bad input."""
+"""planning.benchmark: the name DESIGN.md gives the MotionBenchMaker benchmark forwards to the app
+(drake_sim.tools.plan_benchmark), and imports nothing of the project."""
 
-import hashlib
-import json
 import subprocess
+import sys
+from pathlib import Path
 
-import numpy as np
-import pytest
-
-import planning.benchmark as mut
-from planning import PlanningScene
-from planning.io import mbm
-from tests.mbm_helpers import FakePip, make_problems_archive, make_sdist
+ROOT = Path(__file__).resolve().parents[2]
 
 
-@pytest.fixture
-def fresh(tmp_path, monkeypatch):
-    """An empty cache of its own and no $DRAKE_SIM_MBM."""
-    monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path / "cache"))
-    monkeypatch.delenv(mbm.ENV_VAR, raising=False)
-    return tmp_path / "cache"
-
-
-def test_one_problem_report(tmp_path, capsys, monkeypatch, mbm_folder):
-    report = tmp_path / "report.json"
-    # No --dataset: the problems come from $DRAKE_SIM_MBM.
-    monkeypatch.setenv(mbm.ENV_VAR, str(mbm_folder))
-    code = mut.main(
-        [
-            "--families",
-            "box_panda",
-            "--limit",
-            "1",
-            "--report",
-            str(report),
-        ]
+def test_the_command_runs_the_app():
+    result = subprocess.run(
+        [sys.executable, "-m", "planning.benchmark", "--help"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
     )
-    assert code == 0
-    rows = json.loads(report.read_text())
-    assert len(rows) == 1
-    row = rows[0]
-    for key in (
-        "family",
-        "problem",
-        "valid",
-        "success",
-        "time_s",
-        "path_length",
-        "path_valid_fine",
-        "path",
-    ):
-        assert key in row
-    assert row["family"] == "box_panda" and row["problem"] == 1
-    assert row["valid"] and row["success"] and row["path_valid_fine"]
-    path = np.asarray(row["path"])
-    assert path.shape[1] == 7
-    assert row["path_length"] == pytest.approx(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-    # The path can be re-checked by anyone: check it here with the scene's own queries.
-    folder = mbm_folder
-    scene = PlanningScene()
-    scene.load_moveit(folder / "box_panda/scene0001.yaml")
-    request = mbm.load_request(folder / "box_panda/request0001.yaml")
-    scene.finger_positions = request.q_start[7:]
-    np.testing.assert_allclose(path[0], request.q_start[:7])
-    np.testing.assert_allclose(path[-1], request.q_goal[:7])
-    for a, b in zip(path[:-1], path[1:], strict=True):
-        n = int(np.ceil(np.linalg.norm(b - a) / 0.01))
-        assert all(scene.is_collision_free(a + s * (b - a)) for s in np.linspace(0, 1, n + 1))
-    assert "box_panda" in capsys.readouterr().out
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("usage: python -m planning.benchmark")
+    assert "--families" in result.stdout
 
 
-def test_dataset_may_be_the_archive_its_folder_or_the_problems(tmp_path, fresh):
-    archive = make_problems_archive(tmp_path / "set" / "problems.tar.bz2", ["box_panda"])
-    folder = mut._parse_args(["--dataset", str(archive), "--families", "box_panda"]).dataset
-    assert (folder / "box_panda" / "scene0001.yaml").is_file()
-    assert folder.is_relative_to(fresh)  # unpacked into the cache, not beside the archive
-    for given in (archive.parent, folder):
-        assert mut._parse_args(["--dataset", str(given), "--families", "box_panda"]).dataset == (
-            folder
-        )
+def test_importing_it_runs_nothing():
+    import planning.benchmark  # noqa: F401, PLC0415 (the import is the test)
 
-
-def test_without_dataset_the_problems_are_downloaded_once_then_cached(
-    tmp_path, fresh, monkeypatch, capsys
-):
-    archive = make_problems_archive(tmp_path / "src" / "problems.tar.bz2", ["box_panda"])
-    monkeypatch.setitem(
-        mbm.ARCHIVE_SHA256, "panda", hashlib.sha256(archive.read_bytes()).hexdigest()
-    )
-    pip = FakePip(make_sdist(tmp_path / "sdist", {"panda": archive.read_bytes()}).read_bytes())
-    monkeypatch.setattr(subprocess, "run", pip)
-    args = mut._parse_args(["--families", "box_panda", "--limit", "1"])
-    assert args.dataset == fresh / "mbm" / "panda"
-    assert capsys.readouterr().err.startswith("note: downloading the MotionBenchMaker panda")
-    assert mut._parse_args(["--families", "box_panda"]).dataset == args.dataset
-    assert len(pip.commands) == 1 and capsys.readouterr().err == ""
-
-
-def one_error_line(capsys) -> str:
-    err = capsys.readouterr().err
-    assert err.startswith("error: ") and err.count("\n") == 1, err
-    return err
-
-
-def test_problems_that_cannot_be_had_exit_2_with_one_line(tmp_path, fresh, monkeypatch, capsys):
-    stderr = "ERROR: Could not find a version that satisfies the requirement vamp-planner==0.6.4\n"
-    monkeypatch.setattr(subprocess, "run", FakePip(returncode=1, stderr=stderr))
-    assert mut.main(["--limit", "1"]) == 2
-    note, err = capsys.readouterr().err.splitlines()  # the note on the download, the error
-    assert note.startswith("note: downloading") and err.startswith("error: cannot download")
-    assert "Could not find a version" in err and "--dataset" in err
-    assert not (fresh / "mbm" / "panda").exists()
-    corrupt = tmp_path / "problems.tar.bz2"
-    corrupt.write_bytes(b"BZh9 not really")
-    assert mut.main(["--dataset", str(corrupt)]) == 2
-    assert "not a readable problems.tar.bz2" in one_error_line(capsys)
-    monkeypatch.setenv(mbm.ENV_VAR, str(tmp_path / "nowhere"))
-    assert mut.main(["--limit", "1"]) == 2
-    assert f"error: {mbm.ENV_VAR}: " in one_error_line(capsys)
-    given = make_problems_archive(tmp_path / "set" / "problems.tar.bz2", ["box_panda"])
-    assert mut.main(["--dataset", str(given), "--families", "cage_panda"]) == 2
-    assert "no MBM family cage_panda" in one_error_line(capsys)
-
-
-def test_bad_arguments_exit_2(capsys):
-    assert mut.main(["--families", "nowhere"]) == 2
-    assert mut.main(["--dataset", "/nonexistent/folder"]) == 2
-    assert capsys.readouterr().err
-
-
-def test_summary_table():
-    rows = [
-        {
-            "family": "f",
-            "problem": 1,
-            "valid": True,
-            "success": True,
-            "time_s": 0.1,
-            "path_length": 2.0,
-            "path_valid_fine": True,
-        },
-        {
-            "family": "f",
-            "problem": 2,
-            "valid": False,
-            "success": False,
-            "time_s": None,
-            "path_length": None,
-            "path_valid_fine": None,
-        },
-    ]
-    table = mut.summarize(rows)
-    assert "f " in table and "100.0" in table and "2.00" in table
-    assert "speed-up" not in table
-    rows[0].update(ompl_success=True, ompl_time_s=0.5, ompl_path_length=2.5)
-    rows.append(dict(rows[0], problem=3, time_s=0.3, ompl_success=False, ompl_time_s=5.0))
-    table = mut.summarize(rows)
-    # Medians: ours 0.2 s, OMPL 2.75 s over both valid problems; 0.1 vs 0.5 s on the one
-    # both solved.
-    assert "13.8x over 2 valid problems" in table
-    assert "5.0x over the 1 both solved (ours 100.0 ms)" in table
-
-
-def test_plot_writes_a_png(tmp_path):
-    pytest.importorskip("matplotlib")
-    rows = [
-        {"family": "f", "problem": k, "valid": True, "success": True, "time_s": 0.05 * k}
-        | {"ompl_success": k > 1, "ompl_time_s": 0.2 * k}
-        for k in range(1, 6)
-    ]
-    rows.append({"family": "f", "problem": 6, "valid": False, "success": False, "time_s": None})
-    out = tmp_path / "times.png"
-    mut.plot_times(rows, out)
-    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-
-
-def test_progress_falls_back_to_plain_lines(monkeypatch, capsys):
-    import builtins
-
-    real_import = builtins.__import__
-
-    def no_tqdm(name, *args, **kwargs):
-        if name == "tqdm":
-            raise ImportError(name)
-        return real_import(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", no_tqdm)
-    bar = mut._progress(3)
-    bar.write("one line")
-    bar.update()
-    bar.close()
-    assert "one line" in capsys.readouterr().out
-
-
-def test_profile_prints_the_breakdown(capsys, mbm_folder):
-    profile = ["--families", "cage_panda", "--limit", "2", "--profile"]
-    assert mut.main(["--dataset", str(mbm_folder), *profile]) == 0
-    out = capsys.readouterr().out
-    assert "profile over 2 requests" in out and "tail only" in out
-    assert "compiled: fine check on spheres" in out and "checks per request" in out
-    assert "compiled_rrt.plan" in out and "compiled configurations" in out
-    # The wrappers are gone afterwards.
-    assert mut.MotionPlanner.plan_path.__module__ == "planning.motion_planner"
+    text = (ROOT / "planning" / "benchmark.py").read_text()
+    assert "import drake_sim" not in text and "from drake_sim" not in text

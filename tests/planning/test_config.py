@@ -9,6 +9,7 @@ import pytest
 import planning.config as mut
 from drake_sim.base.errors import ConfigError
 from planning.model.layout import FINGER_OPEN, READY_Q
+from planning.model.panda_config import PandaModelConfig
 
 
 def test_defaults_describe_the_panda_on_its_table():
@@ -97,6 +98,6 @@ def test_check_names_where_the_values_came_from():
         mut.check_panda_config(bad)
     with pytest.raises(ConfigError, match="^scenario.yaml: ik"):
         mut.check_panda_config(bad, "scenario.yaml")
-    named = dc.replace(mut.PandaModelConfig(), named_configurations={"pi": [math.pi] * 6})
+    named = dc.replace(PandaModelConfig(), named_configurations={"pi": [math.pi] * 6})
     with pytest.raises(ConfigError, match="named_configurations.pi has 6 values"):
         mut.check_panda_config(mut.PandaPlanningConfig(model=named))

@@ -7,8 +7,9 @@ import math
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
+from drake_sim.base.planar import wrap_angle
 from drake_sim.robots.ddrive_params import RobotParams
-from drake_sim.systems.axle import axle_yaw_and_pitch, wrap_angle
+from drake_sim.systems.axle import axle_yaw_and_pitch
 from drake_sim.systems.control.diff_drive_controller import wheel_loop_gain
 from drake_sim.systems.sensors.imu import ANGULAR_VELOCITY, IMU_SIZE, rotation_from_imu
 

@@ -14,6 +14,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.planar import wrap_angle
 
 
 @dc.dataclass
@@ -46,17 +47,13 @@ _INDEX = 2  # The waypoint driven to; len(waypoints) once the route is done.
 _TURNING = 3  # 1 while turning on the spot.
 
 
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2 * math.pi) - math.pi
-
-
 def route_command(
     pose, target, turning: bool, config: RouteFollowerConfig
 ) -> tuple[float, float, bool]:
     """The command ``(v, omega, turning)`` that takes a robot at ``pose`` ([x, y, yaw]) towards
     ``target`` ([x, y]), given whether it was turning on the spot."""
     dx, dy = target[0] - pose[0], target[1] - pose[1]
-    error = _wrap(math.atan2(dy, dx) - pose[2])
+    error = wrap_angle(math.atan2(dy, dx) - pose[2])
     if abs(error) > config.turn_in_place:
         turning = True
     elif abs(error) < config.turn_in_place / 3:

@@ -6,30 +6,29 @@ updates the particle filter when the robot has moved enough, and publishes the p
 the filter's estimate at its last update, moved on by the odometry since, so it is current
 between updates. ``set_pose`` is RViz's "2D Pose Estimate" (``/initialpose``) and
 ``start_global_localization`` the ``global_localization`` service. The parameters are the ROS
-node's (``AmclConfig``; values in ``config/amcl.yaml``), plus our ``refinement_*`` keys: an
-optional scan-to-map refinement of each update's estimate (not a ROS parameter; see
-``particle_filter``): with it, the navigation runs on the shipped maze, room and warehouse
-ended every goal within 2.1 cm (5.9 cm without).
+node's (``AmclConfig`` in ``amcl_config``; values in ``config/amcl.yaml``), plus our
+``refinement_*`` keys: an optional scan-to-map refinement of each update's estimate (not a ROS
+parameter; see ``particle_filter``): with it, the navigation runs on the shipped maze, room and
+warehouse ended every goal within 2.1 cm (5.9 cm without).
 
 The filter (``drake_sim.systems.estimation.particle_filter``) costs about 2 ms per update with
 2000 particles and 60 beams here, 3 to 5 ms with the refinement
 (``benchmarks/amcl_benchmark.py``).
 """
 
-import dataclasses as dc
-import math
-from pathlib import Path
-
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
-from drake_sim.base.config import load_typed
-from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
-from drake_sim.base.resources import config_dir
+from drake_sim.base.planar import compose, relative_pose
+from drake_sim.systems.estimation.amcl_config import (
+    AmclConfig,
+    check_amcl_config,
+    default_amcl_config_file,
+    load_amcl_config,
+)
 from drake_sim.systems.estimation.particle_filter import ParticleFilter
-from drake_sim.systems.estimation.scan_matching_slam import compose, relative
 from drake_sim.systems.estimation.slam import NO_SCAN, SCAN_DELAY
 from drake_sim.systems.sensors.lidar import LaserScan
 
@@ -41,156 +40,6 @@ __all__ = [
     "default_amcl_config_file",
     "load_amcl_config",
 ]
-
-
-@dc.dataclass
-class AmclConfig:
-    """Parameters of the ROS ``amcl`` node (names and defaults are ROS's; the values used
-    here are in ``config/amcl.yaml``)."""
-
-    min_particles: int = 100  # Fewest particles, >= 1.
-    max_particles: int = 5000  # Most particles, >= min_particles.
-    kld_err: float = 0.01  # KLD bound on the error of the sampled distribution, > 0.
-    kld_z: float = 0.99  # Upper standard normal quantile of the KLD bound, > 0.
-    update_min_d: float = 0.2  # m moved before a filter update, >= 0.
-    update_min_a: float = math.pi / 6  # rad turned before a filter update, >= 0.
-    resample_interval: int = 2  # Filter updates per resampling, >= 1.
-    # Resample only when the effective sample size 1 / sum(w^2) falls below half the count.
-    selective_resampling: bool = False
-    recovery_alpha_slow: float = 0.0  # Rate of the slow likelihood average, [0, 1]; 0: off.
-    recovery_alpha_fast: float = 0.0  # Rate of the fast average, [0, 1], > slow when on.
-    initial_pose_x: float = 0.0  # m, the initial pose's mean in the map frame.
-    initial_pose_y: float = 0.0  # m.
-    initial_pose_a: float = 0.0  # rad.
-    initial_cov_xx: float = 0.5 * 0.5  # m^2, the initial pose's variance in x, >= 0.
-    initial_cov_yy: float = 0.5 * 0.5  # m^2.
-    initial_cov_aa: float = (math.pi / 12) ** 2  # rad^2.
-    laser_min_range: float = -1.0  # m; <= 0: the scan's range_min.
-    laser_max_range: float = -1.0  # m; <= 0: the scan's range_max.
-    laser_max_beams: int = 30  # Beams of each scan used, >= 2.
-    laser_z_hit: float = 0.95  # Weight of the hit (Gaussian) part, >= 0.
-    laser_z_rand: float = 0.05  # Weight of the random part, >= 0; z_hit + z_rand > 0.
-    laser_sigma_hit: float = 0.2  # m, std dev of the hit part, > 0.
-    laser_likelihood_max_dist: float = 2.0  # m, cap of the distance field, > 0.
-    laser_model_type: str = "likelihood_field"  # The only model implemented.
-    odom_model_type: str = "diff-corrected"  # The only model implemented (differential drive).
-    odom_alpha1: float = 0.2  # Rotation noise from rotation, >= 0.
-    odom_alpha2: float = 0.2  # Rotation noise from translation, >= 0.
-    odom_alpha3: float = 0.2  # Translation noise from translation, >= 0.
-    odom_alpha4: float = 0.2  # Translation noise from rotation, >= 0.
-    # Scan-to-map refinement (ours, not a ROS parameter): after each filter update, match the
-    # scan (every beam in range) against the map from the estimate (``scan_matcher``) and take
-    # the match as the estimate when it converged, moved less than the gate and scores well.
-    scan_match_refinement: bool = False
-    refinement_max_correction: float = 0.15  # m, the gate on the position correction, > 0.
-    refinement_max_correction_a: float = math.radians(5.0)  # rad, the gate on yaw, > 0.
-    refinement_min_score: float = 0.5  # Least mean field value of the end points, [0, 1].
-    refinement_min_points: int = 20  # Fewest beams in range to match, >= 3.
-    refinement_max_beams: int = 180  # Most beams matched (evenly spread over those in range).
-    refinement_levels: int = 1  # Pyramid levels, cells of map resolution * 2^k, >= 1.
-    # A finer first level, cells of the map's resolution / this, peaked on obstacles' faces
-    # (see ``particle_filter._match_pyramid``), >= 1; 1: none.
-    refinement_subdivision: int = 4
-    refinement_iterations: int = 3  # Gauss-Newton steps per level, >= 1.
-    refinement_field: float = 1.0  # Cells, width of the likelihood field matched on, > 0.
-    refinement_tolerance: float = 0.005  # m and rad: converged if one more step is smaller.
-    # Along surfaces that all face one way (normal spread ratio below this), keep the filter's
-    # position (``scan_matcher.normal_spread``), [0, 1].
-    refinement_degenerate_ratio: float = 0.05
-    refinement_shift_particles: bool = True  # Move the particles with the correction too.
-
-    def initial_pose(self) -> np.ndarray:
-        """Returns [x, y, yaw] (m, m, rad) of the configured initial pose."""
-        return np.array([self.initial_pose_x, self.initial_pose_y, self.initial_pose_a])
-
-    def initial_covariance(self) -> np.ndarray:
-        """Returns the configured initial covariance, diagonal 3x3 (m^2, m^2, rad^2)."""
-        return np.diag([self.initial_cov_xx, self.initial_cov_yy, self.initial_cov_aa])
-
-
-def check_amcl_config(
-    config: AmclConfig, where: str = "AmclConfig", prefix: str = ""
-) -> AmclConfig:
-    """Returns ``config`` if its values are in range; raises ``ConfigError`` naming ``where``
-    and the first bad key, as ``prefix`` + key (e.g. ``prefix="amcl."`` in a scenario file)."""
-
-    def fail(key, rule):
-        value = getattr(config, key)
-        raise ConfigError(f"{where}: '{prefix}{key}' must be {rule}, got {value!r}")
-
-    for field in dc.fields(config):
-        value = getattr(config, field.name)
-        if isinstance(value, float) and not math.isfinite(value):
-            fail(field.name, "finite")
-    if config.min_particles < 1:
-        fail("min_particles", "at least 1")
-    if config.max_particles < config.min_particles:
-        fail("max_particles", f"at least min_particles ({config.min_particles})")
-    for key in ("kld_err", "kld_z", "laser_sigma_hit", "laser_likelihood_max_dist"):
-        if not getattr(config, key) > 0:
-            fail(key, "positive")
-    for key in ("update_min_d", "update_min_a", "laser_z_hit", "laser_z_rand"):
-        if getattr(config, key) < 0:
-            fail(key, "non-negative")
-    for key in ("initial_cov_xx", "initial_cov_yy", "initial_cov_aa"):
-        if getattr(config, key) < 0:
-            fail(key, "non-negative")
-    for key in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4"):
-        if getattr(config, key) < 0:
-            fail(key, "non-negative")
-    if config.laser_z_hit + config.laser_z_rand <= 0:
-        fail("laser_z_rand", "positive when laser_z_hit is 0")
-    if config.resample_interval < 1:
-        fail("resample_interval", "at least 1")
-    if config.laser_max_beams < 2:
-        fail("laser_max_beams", "at least 2")
-    for key in ("recovery_alpha_slow", "recovery_alpha_fast"):
-        if not 0.0 <= getattr(config, key) <= 1.0:
-            fail(key, "in [0, 1]")
-    if config.recovery_alpha_slow > 0 and config.recovery_alpha_fast <= config.recovery_alpha_slow:
-        fail("recovery_alpha_fast", "above recovery_alpha_slow (or both 0)")
-    if 0 < config.laser_max_range <= config.laser_min_range:
-        fail("laser_max_range", "above laser_min_range (or <= 0: the scan's)")
-    for key in (
-        "refinement_max_correction",
-        "refinement_max_correction_a",
-        "refinement_field",
-        "refinement_tolerance",
-    ):
-        if not getattr(config, key) > 0:
-            fail(key, "positive")
-    for key in ("refinement_min_score", "refinement_degenerate_ratio"):
-        if not 0.0 <= getattr(config, key) <= 1.0:
-            fail(key, "in [0, 1]")
-    if config.refinement_max_beams < config.refinement_min_points:
-        fail(
-            "refinement_max_beams",
-            f"at least refinement_min_points ({config.refinement_min_points})",
-        )
-    if config.refinement_min_points < 3:
-        fail("refinement_min_points", "at least 3")
-    for key in ("refinement_levels", "refinement_iterations", "refinement_subdivision"):
-        if getattr(config, key) < 1:
-            fail(key, "at least 1")
-    if config.laser_model_type != "likelihood_field":
-        fail("laser_model_type", "'likelihood_field' (the only model implemented)")
-    if config.odom_model_type != "diff-corrected":
-        fail("odom_model_type", "'diff-corrected' (the only model implemented)")
-    return config
-
-
-def load_amcl_config(path: Path | str) -> AmclConfig:
-    """Loads and checks an ``AmclConfig`` YAML file (missing keys keep ROS's defaults).
-
-    Raises:
-        ConfigError: one line naming the file and the key.
-    """
-    return check_amcl_config(load_typed(AmclConfig, filename=path), str(path))
-
-
-def default_amcl_config_file() -> Path:
-    """Returns the shipped ``config/amcl.yaml``."""
-    return config_dir() / "amcl.yaml"
 
 
 class _AmclState:
@@ -369,5 +218,5 @@ class Amcl(LeafSystem):
         if current.odometry is None:
             output.SetFromVector(current.pose)
             return
-        moved = relative(current.odometry, self._odometry.Eval(context))
+        moved = relative_pose(current.odometry, self._odometry.Eval(context))
         output.SetFromVector(compose(current.pose, moved))

@@ -42,6 +42,7 @@ from pydrake.multibody.tree import RigidBody
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.planar import wrap_angle_exact
 
 
 @dc.dataclass
@@ -130,7 +131,7 @@ def quantise(q: np.ndarray, ticks_per_revolution: int) -> np.ndarray:
 
 
 # Layout of the odometry's discrete state.
-_POSE = slice(0, 3)  # x, y, yaw of the base, world frame (m, m, rad in [-pi, pi]).
+_POSE = slice(0, 3)  # x, y, yaw of the base, world frame (m, m, rad in [-pi, pi)).
 _PREV = slice(3, 5)  # The quantised left and right joint angles at the last update, rad.
 _TWIST = slice(5, 7)  # Forward speed (m/s) and yaw rate (rad/s) over the last update.
 _STEP = 7  # Number of updates so far (picks the slip noise of the next one).
@@ -150,7 +151,7 @@ class EncoderOdometry(LeafSystem):
         - twist
 
     ``wheel_state`` is ``[q_left, q_right, v_left, v_right]`` (rad, rad/s; only the angles are
-    read). ``pose`` is ``[x, y, yaw]`` of the base (m, m, rad in [-pi, pi]) in the world,
+    read). ``pose`` is ``[x, y, yaw]`` of the base (m, m, rad in [-pi, pi)) in the world,
     starting at ``initial_pose``; ``twist`` is ``[v, omega]`` (m/s, rad/s) over the last
     update. Both are held between updates, every ``1 / config.rate`` seconds. The attribute
     ``calibration`` is this run's ``OdometryCalibration`` (what the odometry believes).
@@ -221,7 +222,7 @@ class EncoderOdometry(LeafSystem):
         x[_POSE] = (
             px + ds * math.cos(mid),
             py + ds * math.sin(mid),
-            math.remainder(yaw + dyaw, 2 * math.pi),
+            wrap_angle_exact(yaw + dyaw),  # no rounding added up step by step
         )
         x[_PREV] = q
         x[_TWIST] = ds / self._dt, dyaw / self._dt

@@ -23,8 +23,9 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import RigidBody
 from pydrake.systems.framework import BasicVector, LeafSystem
 
+from drake_sim.base.planar import wrap_angle
 from drake_sim.robots.ddrive_params import RobotParams
-from drake_sim.systems.axle import axle_yaw_and_pitch, wrap_angle
+from drake_sim.systems.axle import axle_yaw_and_pitch
 from drake_sim.systems.sensors.imu import (
     GRAVITY_W,
     IMU_SIZE,

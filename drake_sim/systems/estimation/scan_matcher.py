@@ -43,12 +43,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from drake_sim.base.planar import wrap_angle
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
-
-
-def wrap_angle(angle):
-    """Wraps angles (rad) to [-pi, pi)."""
-    return (np.asarray(angle) + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class MatchMap:

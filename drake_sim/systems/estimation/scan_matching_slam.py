@@ -48,6 +48,7 @@ import numpy as np
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap, save_map
+from drake_sim.base.planar import compose, relative_pose
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 from drake_sim.systems.estimation.scan_matcher import (
     MatchMap,
@@ -56,7 +57,6 @@ from drake_sim.systems.estimation.scan_matcher import (
     normal_spread,
     surface_normals,
     transform_points,
-    wrap_angle,
 )
 
 
@@ -146,21 +146,6 @@ def load_slam_config(path: Path | str) -> SlamConfig:
     config = load_typed(SlamConfig, filename=path)
     config.check(str(path))
     return config
-
-
-def compose(a, b) -> np.ndarray:
-    """The planar pose a (x) b: b (x, y, yaw) given in frame a, expressed where a is."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return np.array(
-        [a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], float(wrap_angle(a[2] + b[2]))]
-    )
-
-
-def relative(a, b) -> np.ndarray:
-    """a^-1 (x) b: pose b seen from pose a (x, y, yaw)."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    return np.array([c * dx + s * dy, -s * dx + c * dy, float(wrap_angle(b[2] - a[2]))])
 
 
 class ScanMatchingSlam:
@@ -264,7 +249,7 @@ class ScanMatchingSlam:
         sensor_points = ranges[hit, None] * normals[hit]
         normals[hit] = surface_normals(sensor_points)
         if self._odom is not None:
-            prediction = compose(self._pose, relative(self._odom, odom_pose))
+            prediction = compose(self._pose, relative_pose(self._odom, odom_pose))
             self._pose = self._match(sensor_points, normals[hit], prediction)
         self._odom = odom_pose
         if self._map_due():
@@ -299,7 +284,7 @@ class ScanMatchingSlam:
             hit_offset=config.hit_offset,
         )
         self.last_match = result
-        offset = relative(prediction, result.pose)
+        offset = relative_pose(prediction, result.pose)
         if (
             math.hypot(offset[0], offset[1]) > config.max_correction
             or abs(offset[2]) > math.radians(config.max_correction_deg)
@@ -324,7 +309,7 @@ class ScanMatchingSlam:
     def _map_due(self) -> bool:
         if self.map_updates < self.config.initial_map_updates or self._last_map_pose is None:
             return True
-        moved = relative(self._last_map_pose, self._pose)
+        moved = relative_pose(self._last_map_pose, self._pose)
         return math.hypot(moved[0], moved[1]) >= self.config.map_update_distance or abs(
             moved[2]
         ) >= math.radians(self.config.map_update_angle_deg)

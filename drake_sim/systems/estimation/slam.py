@@ -13,12 +13,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_sim.base.map_files import OccupancyMap
-from drake_sim.systems.estimation.scan_matching_slam import (
-    ScanMatchingSlam,
-    SlamConfig,
-    compose,
-    relative,
-)
+from drake_sim.base.planar import compose, relative_pose
+from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, SlamConfig
 from drake_sim.systems.sensors.lidar import LaserScan
 
 SCAN_DELAY = 1e-4
@@ -150,5 +146,5 @@ class SlamSystem(LeafSystem):
 
     def _calc_pose(self, context, output):
         current = self._get(context)
-        moved = relative(current.odometry_at_scan, self._odometry.Eval(context))
+        moved = relative_pose(current.odometry_at_scan, self._odometry.Eval(context))
         output.SetFromVector(compose(current.slam.pose, moved))

@@ -31,6 +31,7 @@ import dataclasses as dc
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -42,7 +43,7 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.resources import config_dir
+from drake_sim.base.presets import preset_file
 from drake_sim.systems.sensors.ray_casting import Fan
 from drake_sim.systems.sensors.scene_shapes import SceneRayCaster
 
@@ -51,8 +52,12 @@ from drake_sim.systems.sensors.scene_shapes import SceneRayCaster
 class LidarConfig:
     """A planar laser scanner: beams, field of view, range limits, noise and scan rate.
 
-    The defaults are the TurtleBot3's LDS-01 (``config/lidars/lds_01.yaml``).
+    Presets (``PRESETS``): ``config/lidars/<name>.yaml``, named in a scenario (``lidar: lds_01``,
+    ``--set lidar=sick_tim571``) or read by ``lidar_config``. The defaults are the TurtleBot3's
+    LDS-01, ``config/lidars/lds_01.yaml`` (``test_lidar`` holds them equal).
     """
+
+    PRESETS: ClassVar[str] = "lidars"
 
     samples: int = 360  # beams per scan.
     fov_deg: float = 360.0  # degrees, field of view, in (0, 360].
@@ -113,9 +118,24 @@ def load_lidar_config(path: Path | str) -> LidarConfig:
     return check_lidar_config(load_typed(LidarConfig, filename=path), where=str(path))
 
 
+def lidar_config(name_or_path: str | Path, where: str = "lidar") -> LidarConfig:
+    """The checked lidar of a preset's name (``lds_01``, the TurtleBot3's; ``sick_tim571``) or
+    of a YAML file (a ``Path``, or text with a ``/`` or a ``.yaml`` ending): ``--lidar NAME|FILE``.
+
+    Raises:
+        ConfigError: an unknown name (naming the known ones), no such file, or a bad file.
+    """
+    path = preset_file(LidarConfig, name_or_path, where)
+    return check_lidar_config(load_typed(LidarConfig, filename=path), where=str(path))
+
+
 def lidar_preset_file(name: str = "lds_01") -> Path:
-    """Returns ``config/lidars/<name>.yaml``: ``lds_01`` (TurtleBot3) or ``sick_tim571``."""
-    return config_dir() / "lidars" / f"{name}.yaml"
+    """Returns ``config/lidars/<name>.yaml``: ``lds_01`` (TurtleBot3) or ``sick_tim571``.
+
+    Raises:
+        ConfigError: no such preset.
+    """
+    return preset_file(LidarConfig, name, "lidar preset")
 
 
 @dc.dataclass(frozen=True, eq=False)

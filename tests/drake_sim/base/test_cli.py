@@ -188,23 +188,18 @@ def test_run_lets_bugs_through():
         mut.run(main)
 
 
-def test_robot_and_config_options(tmp_path):
-    dut = mut.ArgumentParser(prog="tool")
-    mut.add_robot_and_config_options(
-        dut, default_robot=tmp_path / "r.yaml", default_config=tmp_path / "c.yaml"
-    )
-    args = dut.parse_args([])  # the defaults are not checked: their loaders name them
-    assert (args.robot, args.config) == (tmp_path / "r.yaml", tmp_path / "c.yaml")
-    (tmp_path / "a.yaml").write_text("a: 1\n")
-    (tmp_path / "b.yaml").write_text("b: 2\n")
-    args = dut.parse_args(
-        ["--robot", str(tmp_path / "a.yaml"), "--config", str(tmp_path / "b.yaml")]
-    )
-    assert (args.robot, args.config) == (tmp_path / "a.yaml", tmp_path / "b.yaml")
-    with pytest.raises(ConfigError, match=r"argument --robot: robot file not found: .*x\.yaml"):
-        dut.parse_args(["--robot", str(tmp_path / "x.yaml")])
-    with pytest.raises(ConfigError, match=r"argument --config: scenario file is a directory"):
-        dut.parse_args(["--config", str(tmp_path)])
+def test_preset_or_file(tmp_path):
+    check = mut.preset_or_file("lidar")
+    assert check("sick_tim571") == "sick_tim571"  # a name: the loader finds it or says why
+    assert check("lds-01") == "lds-01"
+    good = tmp_path / "my_lidar.yaml"
+    good.write_text("samples: 90\n")
+    assert check(str(good)) == good
+    with pytest.raises(argparse.ArgumentTypeError, match="lidar file not found"):
+        check(str(tmp_path / "none.yaml"))
+    (tmp_path / "empty.yaml").write_text("")
+    with pytest.raises(argparse.ArgumentTypeError, match="lidar file is empty"):
+        check(str(tmp_path / "empty.yaml"))
 
 
 def test_input_file(tmp_path):
@@ -356,7 +351,7 @@ def test_exit_at_once_does_not_wait_for_worker_threads():
         ("drake_sim.pickplace", ["--headless", "--scene", "{tmp}"], "scene file is a directory"),
         ("planning.benchmark", ["--report", "{tmp}"], "report is a directory"),
         ("planning.benchmark", ["--options", "{file}"], "options file is empty"),
-        ("planning.regions", ["--scene", "{tmp}"], "scene file is a directory"),
+        ("drake_sim.tools.regions", ["--scene", "{tmp}"], "scene file is a directory"),
         ("drake_sim.tools.generate_models", ["--models", "{file}"], "is not a directory"),
         ("drake_sim.tools.readme_pictures", ["--out", "{file}/images"], "is not a directory"),
         ("drake_sim.tools.replay_frames", ["{file}", "out.gif"], "replay is empty"),

@@ -5,7 +5,7 @@ import pytest
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.sweep import backends as mut
-from drake_sim.sweep.runners import make_job
+from drake_sim.sweep.jobs import make_job
 from drake_sim.sweep.spec import load_sweep, rollouts
 from tests.drake_sim.sweep.sweep_files import crash_on_odd_index, tiny_flip
 

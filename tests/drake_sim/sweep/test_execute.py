@@ -1,7 +1,7 @@
 import json
 
 from drake_sim.sweep import execute as mut
-from drake_sim.sweep.runners import make_job
+from drake_sim.sweep.jobs import make_job
 from drake_sim.sweep.spec import load_sweep, rollouts
 from drake_sim.sweep.table import TABLE_FILE, Table, read_rows
 from tests.drake_sim.sweep.sweep_files import tiny_flip

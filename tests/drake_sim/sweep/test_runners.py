@@ -1,53 +1,13 @@
-import dataclasses as dc
-
 import pytest
 
 from drake_sim.base import config
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.ddrive import default_robot_file
+from drake_sim.sweep import jobs
 from drake_sim.sweep import runners as mut
 from drake_sim.sweep.spec import load_sweep
 from tests.drake_sim.sweep.sweep_files import tiny_flip, write_sweep
-
-
-@dc.dataclass
-class Inner:
-    position: list[float] = dc.field(default_factory=lambda: [1.0, 2.0, 3.0])
-    mass: float = 0.5
-
-
-@dc.dataclass
-class Outer:
-    inner: Inner = dc.field(default_factory=Inner)
-    rate: float = 10.0
-    grid: list[list[float]] = dc.field(default_factory=lambda: [[1.0, 2.0], [3.0, 4.0]])
-    items: list[Inner] = dc.field(default_factory=lambda: [Inner(mass=1.5)])
-
-
-def test_resolve():
-    dut = Outer()
-    assert mut.resolve(dut, "rate", "w") == 10.0
-    assert mut.resolve(dut, "inner.mass", "w") == 0.5
-    assert mut.resolve(dut, "inner.position[2]", "w") == 3.0
-    assert mut.resolve(dut, "grid[1][0]", "w") == 3.0
-    assert mut.resolve(dut, "items[0].position[1]", "w") == 2.0
-    assert mut.resolve(dut, "items[0].mass", "w") == 1.5
-    with pytest.raises(ConfigError, match=r"w: unknown parameter path 'inner.bogus'.*mass"):
-        mut.resolve(dut, "inner.bogus", "w")
-    with pytest.raises(ConfigError, match="inner.position has no item 3"):
-        mut.resolve(dut, "inner.position[3]", "w")
-    with pytest.raises(ConfigError, match="is a section, not a value"):
-        mut.resolve(dut, "inner", "w")
-    with pytest.raises(ConfigError, match="unknown parameter path 'rate.x'"):
-        mut.resolve(dut, "rate.x", "w")
-    with pytest.raises(ConfigError, match=r"grid\[1\] has no item 2"):
-        mut.resolve(dut, "grid[1][2]", "w")
-    with pytest.raises(ConfigError, match="rate has no item 0"):
-        mut.resolve(dut, "rate[0]", "w")
-    with pytest.raises(ConfigError, match="is a section, not a value"):
-        mut.resolve(dut, "items[0]", "w")
-    with pytest.raises(ConfigError, match=r"w: parameter path: malformed key 'grid\[-1\]'"):
-        mut.resolve(dut, "grid[-1]", "w")
+from tests.drake_sim.sweep.test_jobs import Inner, Outer
 
 
 def test_override_strings():
@@ -59,11 +19,11 @@ def test_override_strings():
 
 
 def job_of(tmp_path, text):
-    return mut.make_job(load_sweep(write_sweep(tmp_path, text)))
+    return jobs.make_job(load_sweep(write_sweep(tmp_path, text)))
 
 
 def test_make_job(tmp_path):
-    job = mut.make_job(load_sweep(tiny_flip(tmp_path)))
+    job = jobs.make_job(load_sweep(tiny_flip(tmp_path)))
     assert job["runner"] == "flip"
     assert job["scenario"].endswith("config/flip.yaml")
     assert job["options"] == {"duration": 0.3, "robot": None}
@@ -106,7 +66,7 @@ def test_make_job_bad_input(tmp_path, text, needle):
 
 
 def test_run_rollout_flip(tmp_path):
-    job = mut.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
+    job = jobs.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
     rollout = {"index": 4, "seed": 11, "overrides": {"flip.drive_speed": 0.7}}
     dut = mut.run_rollout(job, rollout)
     assert (dut["index"], dut["seed"], dut["status"], dut["reason"]) == (4, 11, "ok", "")
@@ -116,7 +76,7 @@ def test_run_rollout_flip(tmp_path):
 
 
 def test_a_failing_rollout_is_a_row_with_its_reason(tmp_path):
-    job = mut.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
+    job = jobs.make_job(load_sweep(tiny_flip(tmp_path, duration=0.2)))
     dut = mut.run_rollout(job, {"index": 0, "seed": 1, "overrides": {"robot.body.mass": -1.0}})
     assert dut["status"] == "failed"
     assert dut["reason"].startswith("ConfigError: ")
@@ -127,13 +87,13 @@ def test_a_failing_rollout_is_a_row_with_its_reason(tmp_path):
 def test_pickplace_rollout_moves_the_object(tmp_path):
     job = job_of(tmp_path, "runner: pickplace\n")
     runner = mut.get_runner("pickplace")
-    default = runner.load(job["scenario"], {}, 5)
+    default = runner.load(job["scenario"], {}, {}, 5).scenario
     overrides = {
         "scene.object.position[1]": -0.3,
         "mode": "kinematic",
         "scene.object.position[0]": 0.55,
     }
-    moved = runner.load(job["scenario"], overrides, 5)
+    moved = runner.load(job["scenario"], {}, overrides, 5).scenario
     assert moved.scene.object.position == [0.55, -0.3, default.scene.object.position[2]]
     assert moved.mode == "kinematic"
     assert moved.planner.seed == 5
@@ -185,7 +145,9 @@ def test_random_scenes_are_generated_by_number(tmp_path):
         )
     job = job_of(tmp_path, "runner: pickplace\nparameters: {scene: {random: 2}}\n")
     runner = mut.get_runner("pickplace")
-    scenes = [runner.load(job["scenario"], {"scene": k}, seed=1).scene for k in (0, 1, 0)]
+    scenes = [
+        runner.load(job["scenario"], {}, {"scene": k}, seed=1).scenario.scene for k in (0, 1, 0)
+    ]
     assert scenes[0] == scenes[2] and scenes[0] != scenes[1]  # scene k is always the same
-    default = runner.load(job["scenario"], {}, seed=1).scene
+    default = runner.load(job["scenario"], {}, {}, seed=1).scenario.scene
     assert scenes[0].object != default.object

@@ -1,5 +1,5 @@
 """Axle-frame geometry: yaw and pitch about the axle (unchanged yaw through a flip), which way
-up the body is, and angle wrapping."""
+up the body is."""
 
 import math
 
@@ -8,6 +8,7 @@ import pytest
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 import drake_sim.systems.axle as mut
+from drake_sim.base.planar import wrap_angle
 
 
 def R(roll=0.0, pitch=0.0, yaw=0.0) -> np.ndarray:
@@ -27,7 +28,7 @@ def test_pitch_about_the_axle_keeps_the_yaw_through_a_flip(yaw):
     the pitch by that angle and leaves the axle frame's yaw alone."""
     for pitch in np.linspace(-math.pi + 0.01, math.pi - 0.01, 25):
         got_yaw, got_pitch = mut.axle_yaw_and_pitch(R(pitch=pitch, yaw=yaw))
-        assert mut.wrap_angle(got_yaw - yaw) == pytest.approx(0.0, abs=1e-12)
+        assert wrap_angle(got_yaw - yaw) == pytest.approx(0.0, abs=1e-12)
         assert got_pitch == pytest.approx(pitch, abs=1e-12)
 
 
@@ -62,17 +63,3 @@ def test_up_sign():
     assert mut.up_sign(R(roll=2.0)) == -1.0
     assert mut.up_sign(R(pitch=math.pi / 2)) == 1.0  # on its end: counts as upright
     assert mut.up_sign(R(pitch=1.0, yaw=2.0)) == 1.0
-
-
-def test_wrap_angle_to_minus_pi_pi():
-    assert mut.wrap_angle(0.0) == 0.0
-    assert mut.wrap_angle(math.pi) == pytest.approx(-math.pi)  # pi itself wraps to -pi
-    assert mut.wrap_angle(-math.pi) == pytest.approx(-math.pi)
-    assert mut.wrap_angle(1.5 * math.pi) == pytest.approx(-0.5 * math.pi)
-    assert mut.wrap_angle(-7.0) == pytest.approx(-7.0 + 2 * math.pi)
-    rng = np.random.default_rng(1)
-    for angle in rng.uniform(-50.0, 50.0, 200):
-        wrapped = mut.wrap_angle(angle)
-        assert -math.pi <= wrapped < math.pi
-        turns = (angle - wrapped) / (2 * math.pi)
-        assert turns == pytest.approx(round(turns), abs=1e-9)

@@ -10,7 +10,7 @@ from pydrake.geometry import Meshcat
 
 import drake_sim.tools.browser as mut
 from drake_sim import flip
-from drake_sim.flip_run import FlipRun
+from drake_sim.runs.flip import FlipRun
 from drake_sim.tools.replay_frames import capture_replay
 from tests.browser_helpers import (
     COUNT_MESHES,
@@ -18,7 +18,7 @@ from tests.browser_helpers import (
     require_chromium,
     robot_pixels,
 )
-from tests.flip_helpers import default_robot, flip_scenario
+from tests.flip_helpers import default_robot, flip_scenario, seeded
 
 SIZE = (640, 400)
 MIN_ROBOT_PIXELS = 150  # The body covers 250 to 1 000 pixels at this size; the rest has none.
@@ -79,15 +79,15 @@ def test_replay_screenshots_show_the_robot_moving(browser, tmp_path):
 def test_live_meshcat_page_shows_the_robot(browser):
     meshcat = Meshcat()
     scenario = flip_scenario()
-    run = FlipRun(scenario, default_robot(), meshcat=meshcat, realtime=False, seed=1)
-    run.advance_to(0.5)
+    run = FlipRun(seeded(scenario, 1), default_robot(), meshcat=meshcat, realtime=False)
+    run.run(0.5)
     pose = scenario.scene.robot_pose
     meshcat.SetCameraPose([pose.x - 0.6, pose.y - 1.5, 0.8], [pose.x + 0.3, pose.y, 0.1])
     # The page stays connected to Meshcat's websocket, so it never "finishes" loading for
     # `chromium --screenshot`; over the protocol we wait for the scene itself instead.
     browser.open(meshcat.web_url())
     assert browser.wait_for(COUNT_MESHES) > 0
-    run.advance_to(0.6)  # Publishes once more, now that the page listens.
+    run.run(0.6)  # Publishes once more, now that the page listens.
     browser.evaluate("new Promise(r => setTimeout(r, 500))")
     picture = Image.open(io.BytesIO(browser.screenshot()))
     assert picture.size == SIZE

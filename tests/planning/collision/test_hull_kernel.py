@@ -10,9 +10,10 @@ from pydrake.math import RigidTransform, RollPitchYaw
 import planning.collision.hull_kernel as mut
 from planning import PlanningScene
 from planning.collision.checker import CheckerAdapter
+from planning.collision.sphere_arrays import primitives
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import OBJ_COLUMNS
-from planning.collision.spheres import UNKNOWN, _primitives
+from planning.collision.spheres import UNKNOWN
 from planning.scene_objects import SceneObject
 
 CUBE = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
@@ -51,7 +52,7 @@ def proven(h, objects, T):
 
 
 def world(*objects):
-    return np.ascontiguousarray(_primitives(objects))
+    return np.ascontiguousarray(primitives(objects))
 
 
 @pytest.mark.parametrize(
@@ -127,7 +128,7 @@ def near(scene, q, n, seed):
 
 
 def test_never_proves_free_what_drake_finds_colliding_in_mbm_scenes(scene, mbm_folder):
-    from planning.benchmark import _load
+    from drake_sim.tools.plan_benchmark import _load
     from planning.io import mbm
 
     for family in ("cage_panda", "bookshelf_thin_panda", "table_under_pick_panda"):

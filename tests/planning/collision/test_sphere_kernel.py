@@ -425,11 +425,15 @@ def test_packed_data_unpacks_to_the_same_arrays_in_compiled_code(scene):
 # Each module whose compiled functions take in this kernel's code, and the sources its cache is
 # keyed on besides its own file (the kernel, then the others it inlines), in its order.
 _KERNEL_USERS = {
-    "planning.collision.sphere_batch": ["planning.collision.trig"],
+    "planning.collision.sphere_batch": [
+        "planning.collision.trig",
+        "planning.collision.lane_geometry",
+    ],
     "planning.collision.hull_kernel": ["planning.collision.trig"],
     "planning.search.pose_kernel": ["planning.collision.trig"],
     "planning.search.compiled_rrt": [
         "planning.collision.sphere_batch",
+        "planning.collision.lane_geometry",
         "planning.collision.trig",
         "planning.collision.hull_kernel",
     ],

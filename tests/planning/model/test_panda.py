@@ -8,6 +8,7 @@ from drake_sim.base.resources import cache_dir
 from planning import config as config_mod
 from planning.model import assets as panda_assets
 from planning.model import panda as mut
+from planning.model.panda_config import PandaModelConfig
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +104,7 @@ def test_bad_disabled_pair_names_the_body(model):
     from pydrake.planning import RobotDiagramBuilder
 
     builder = RobotDiagramBuilder(time_step=0.0)
-    instance = mut.add_panda(builder.plant(), config_mod.PandaModelConfig())
+    instance = mut.add_panda(builder.plant(), PandaModelConfig())
     builder.plant().Finalize()
     with pytest.raises(ConfigError, match="panda_link9"):
         mut.apply_disabled_collisions(

@@ -42,22 +42,8 @@ def search(
     domain=np.inf,
     domain_min=1.0,
 ):
-    return mut.plan(
-        q_a,
-        q_b,
-        *limits,
-        data,
-        0.1,
-        1.0,
-        0.05,
-        max_checks,
-        iterations,
-        mut.seed_state(seed),
-        anchor_radius,
-        balance,
-        domain,
-        domain_min,
-    )
+    settings = (0.1, 1.0, 0.05, max_checks, iterations, mut.seed_state(seed), anchor_radius)
+    return mut.plan(q_a, q_b, *limits, data, (*settings, balance, domain, domain_min))
 
 
 def test_a_free_straight_line_is_the_path(data, limits, ends):
@@ -205,10 +191,13 @@ def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
 def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     scene, data, limits, ends
 ):
-    args = (*limits, *mut.pack(data), *mut.NO_HULLS, 0.1, 1.0, 0.05, 50_000, 20)
-    tail = (0.0, True, np.inf, 1.0)
+    args = (*limits, *mut.pack(data), *mut.NO_HULLS)
+
+    def settings():  # a fresh generator each time, seeded with 3
+        return (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
+
     status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
-        *ends, *args, mut.seed_state(3), *tail, True, FINE
+        *ends, *args, settings(), True, FINE
     )
     alone = search(data, limits, *ends, seed=3)
     assert status == alone[0] == mut.FOUND and how == alone[2] and unproven == 0
@@ -220,12 +209,12 @@ def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     assert checks == alone[3] + fine[3] + 2  # and the two ends
     # An end the spheres cannot prove free stops it before any search: bit 1 the goal.
     ready = scene.model.named_configurations["ready"]  # inside the box
-    result = mut.solve(ends[0], ready, *args, mut.seed_state(3), *tail, True, FINE)
+    result = mut.solve(ends[0], ready, *args, settings(), True, FINE)
     assert result[0] == mut.ENDS_UNPROVEN and result[4] == 2 and len(result[1]) == 0
     nan = np.full(7, np.nan)
-    assert mut.solve(nan, ends[1], *args, mut.seed_state(3), *tail, True, FINE)[4] == 1
+    assert mut.solve(nan, ends[1], *args, settings(), True, FINE)[4] == 1
     # Without the ends' check it searches; with fine_step 0 it does not fine-check.
-    result = mut.solve(*ends, *args, mut.seed_state(3), *tail, False, 0.0)
+    result = mut.solve(*ends, *args, settings(), False, 0.0)
     assert result[0] == mut.FOUND and result[3] == alone[3] and result[5] == -1
     np.testing.assert_array_equal(result[1], alone[1])
 
@@ -244,11 +233,11 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
     proven = unknown[mut.hull_kernel.prove_free(unknown, data, model.hull_data())]
     assert len(proven) >= 2
     start, goal = proven[0], proven[1]
-    tail = (0.0, True, np.inf, 1.0)
 
     def solve(hull_buffers, check_ends):
-        args = (*limits, *mut.pack(data), *hull_buffers, 0.1, 1.0, 0.05, 50_000, 20)
-        return mut.solve(start, goal, *args, mut.seed_state(3), *tail, check_ends, FINE)
+        args = (*limits, *mut.pack(data), *hull_buffers)
+        settings = (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
+        return mut.solve(start, goal, *args, settings, check_ends, FINE)
 
     without = solve(mut.NO_HULLS, True)
     assert without[0] == mut.ENDS_UNPROVEN and without[4] == 3  # neither end proven

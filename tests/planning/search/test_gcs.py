@@ -119,7 +119,7 @@ def test_unreachable_goal_is_reported(scene, seeds, regions):
 def test_regions_cli_rejects_bad_input(tmp_path):
     def cli(*args):
         return subprocess.run(
-            [sys.executable, "-m", "planning.regions", *args], capture_output=True, text=True
+            [sys.executable, "-m", "drake_sim.tools.regions", *args], capture_output=True, text=True
         )
 
     assert_bad_input(cli("--scene", str(tmp_path / "none.yaml")), "none.yaml")
@@ -129,7 +129,7 @@ def test_regions_cli_rejects_bad_input(tmp_path):
 
 def test_regions_cli_builds_then_loads(tmp_path):
     env = {**os.environ, "DRAKE_SIM_CACHE": str(tmp_path)}
-    command = [sys.executable, "-m", "planning.regions", "--scene", "config/pickplace.yaml"]
+    command = [sys.executable, "-m", "drake_sim.tools.regions", "--scene", "config/pickplace.yaml"]
     command += ["--set", "num_particles=200", "--set", "epsilon=0.05"]
     first = subprocess.run(command, capture_output=True, text=True, env=env)
     assert first.returncode == 0, first.stderr

@@ -108,9 +108,9 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
 
     plan, edge_steps = mut.compiled_rrt.plan, []
 
-    def recorded(q_a, q_b, lower, upper, data, edge_step, *rest):
-        edge_steps.append(edge_step)
-        return plan(q_a, q_b, lower, upper, data, edge_step, *rest)
+    def recorded(q_a, q_b, lower, upper, data, settings):
+        edge_steps.append(settings[0])  # edge_step
+        return plan(q_a, q_b, lower, upper, data, settings)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
     monkeypatch.setattr(mut.compiled_rrt, "plan", recorded)
@@ -203,7 +203,7 @@ def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
     real = mut.compiled_rrt.solve
 
     def recorded(*args):
-        budgets.append(args[11])  # max_checks (after the packed data's and hulls' arrays)
+        budgets.append(args[8][3])  # the settings' max_checks (after the packed arrays)
         return real(*args)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", recorded)

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drake_sim.tools.plan_benchmark import _load
 from planning import MotionPlanner, PlanningScene
-from planning.benchmark import _load
 from planning.io import mbm
 from tests.mbm_helpers import find_mbm_problems
 

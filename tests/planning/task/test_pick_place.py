@@ -26,7 +26,7 @@ class ObstacleWatch:
     def __init__(self, config):
         self.size = config.scene.object.size
         obstacle = config.scene.obstacle
-        from diagrams.panda_station_systems import box_pose
+        from diagrams.scene_boxes import box_pose
 
         self.obstacle = (obstacle.size, box_pose(obstacle))
         self.overlaps, self.lowest = 0, np.inf

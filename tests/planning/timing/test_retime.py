@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 import planning.timing.retime as mut
+from planning.timing.rest_to_rest import segment_profile
+from planning.timing.spline_section import spline_deviation
 
 V_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])  # rad/s
 A_MAX = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])  # rad/s^2
@@ -109,7 +111,7 @@ def test_a_straight_two_waypoint_path_is_rest_to_rest_and_time_optimal():
     q_b = READY + [1.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0]
     dut = mut.Timing([READY, q_b], V_MAX, A_MAX)
     d = q_b - READY
-    duration, ramp, accel = mut.segment_profile(d, V_MAX, A_MAX)
+    duration, ramp, accel = segment_profile(d, V_MAX, A_MAX)
     assert dut.duration == pytest.approx(duration)
     np.testing.assert_allclose(dut.times, [0.0, duration])
     assert dut.smoothed == [] and dut.stops == [0, 1]
@@ -128,29 +130,6 @@ def test_a_straight_two_waypoint_path_is_rest_to_rest_and_time_optimal():
     assert np.max(np.abs(a[:, 1])) == pytest.approx(A_MAX[1])
     assert duration == pytest.approx(d[0] / V_MAX[0] + ramp)
     assert accel == pytest.approx(A_MAX[1] / d[1])
-
-
-def test_a_short_segment_has_a_triangular_profile():
-    d = 0.01 * E[1]
-    duration, ramp, accel = mut.segment_profile(d, V_MAX, A_MAX)
-    assert ramp == pytest.approx(duration / 2)  # accelerate, then brake: no cruise
-    assert duration == pytest.approx(2.0 * np.sqrt(d[1] / A_MAX[1]))
-    peak = mut.sample_segment(ramp, duration, ramp, accel)[1] * d[1]
-    assert peak < V_MAX[1]
-    assert mut.segment_profile(np.zeros(7), V_MAX, A_MAX) == (0.0, 0.0, 0.0)
-
-
-def test_sample_segment_goes_from_rest_to_rest_continuously():
-    duration, ramp, accel = mut.segment_profile(1.5 * E[0], V_MAX, A_MAX)
-    ts = np.linspace(-0.1, duration + 0.1, 2001)
-    s, s_dot, s_ddot = np.array([mut.sample_segment(t, duration, ramp, accel) for t in ts]).T
-    assert s[0] == 0.0 and s[-1] == 1.0 and s_dot[0] == 0.0 and s_dot[-1] == 0.0
-    assert np.all(np.diff(s) >= 0) and np.all(np.abs(np.diff(s)) < 2e-3)  # no jumps
-    assert np.max(s_dot) == pytest.approx(V_MAX[0] / 1.5)
-    inside = (ts > 0) & (ts < duration)
-    np.testing.assert_allclose(np.gradient(s, ts)[inside][5:-5], s_dot[inside][5:-5], atol=0.02)
-    assert set(np.round(s_ddot[inside] / accel, 9)) <= {-1.0, 0.0, 1.0}
-    assert mut.sample_segment(0.3, 0.0, 0.0, 0.0) == (1.0, 0.0, 0.0)  # no motion: at the end
 
 
 def test_sharp_corners_and_repeated_waypoints_are_stops():
@@ -185,16 +164,16 @@ def test_sharp_corners_and_repeated_waypoints_are_stops():
 def test_blend_knots_round_corners_within_the_tolerance():
     path = np.vstack([READY, READY + 0.5 * E[0], READY + 0.5 * E[0] + 0.5 * E[1]])
     tolerance = 0.002
-    assert np.max(mut.spline_deviation(path)) > tolerance  # the spline alone strays
+    assert np.max(spline_deviation(path)) > tolerance  # the spline alone strays
     knots, mask = mut.blend_knots(path, tolerance)
     np.testing.assert_array_equal(knots[mask], path)
     assert len(knots) == len(path) + 6  # 3 on each side of the one interior corner
     for q in knots:
         assert distance_to_polyline(q, path) < 1e-12  # on the straight segments
-    assert np.max(mut.spline_deviation(knots)) <= tolerance
+    assert np.max(spline_deviation(knots)) <= tolerance
     # Straight through: the spline is the line itself.
     line = READY + np.linspace(0.0, 1.0, 4)[:, None] * E[0]
-    np.testing.assert_allclose(mut.spline_deviation(line), 0.0, atol=1e-12)
+    np.testing.assert_allclose(spline_deviation(line), 0.0, atol=1e-12)
 
 
 def test_timing_is_deterministic(path):
@@ -277,44 +256,3 @@ def test_limits_hold_at_the_waypoints_where_the_acceleration_peaks():
     ts = np.concatenate([np.linspace(0.0, dut.duration, 20001), dut.times])
     a = np.array([dut.sample(t)[2] for t in ts])
     assert np.all(np.abs(a) <= A_MAX * (1 + 1e-6)), np.max(np.abs(a) / A_MAX)
-
-
-@pytest.mark.parametrize("seed", range(6))
-def test_the_fast_spline_is_drakes_spline(seed):
-    rng = np.random.default_rng(seed)
-    waypoints = np.cumsum(rng.normal(0.0, rng.uniform(0.01, 0.5), (rng.integers(2, 30), 7)), 0)
-    drake, knots = mut._spline(waypoints)
-    fast, fast_knots = mut._cubic(waypoints)
-    np.testing.assert_array_equal(fast_knots, knots)
-    s = np.linspace(0.0, knots[-1], 500)
-    for order in range(3):
-        expected = (drake if order == 0 else drake.MakeDerivative(order)).vector_values(s).T
-        np.testing.assert_allclose(fast(s, order), expected, atol=1e-9 * 10**order)
-
-
-@pytest.mark.parametrize("seed", range(6))
-def test_grid_points_are_drakes(seed):
-    from pydrake.multibody.optimization import CalcGridPointsOptions, Toppra
-
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(2, 30))
-    waypoints = np.cumsum(rng.normal(0.0, rng.uniform(0.005, 0.4), (n, 7)), axis=0)
-    options = CalcGridPointsOptions(
-        max_err=1e-4, max_iter=100, max_seg_length=0.02, min_points=2 * n
-    )
-    drake, knots = mut._spline(waypoints)
-    fast, _ = mut._cubic(waypoints)
-    expected = Toppra.CalcGridPoints(drake, options)
-    np.testing.assert_allclose(mut.grid_points(fast.derivative(2), knots[-1], options), expected)
-
-
-def test_stopping_time_is_the_sum_of_the_rest_to_rest_segments():
-    rng = np.random.default_rng(3)
-    waypoints = np.cumsum(rng.normal(0.0, 0.3, (9, 7)), axis=0)
-    waypoints[4] = waypoints[3]  # a repeat: no time
-    waypoints[6, 1:] = waypoints[5, 1:]  # one joint alone moves
-    expected = sum(
-        mut._Segment(a, b, V_MAX, A_MAX).duration
-        for a, b in zip(waypoints[:-1], waypoints[1:], strict=True)
-    )
-    assert mut.stopping_time(waypoints, V_MAX, A_MAX) == pytest.approx(expected, rel=1e-12)

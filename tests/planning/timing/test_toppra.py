@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from pydrake.multibody.optimization import CalcGridPointsOptions, Toppra
 
-import planning.timing.retime as retime
 import planning.timing.toppra as mut
+from planning.timing.spline_section import drake_spline, seven_joint_plant
 
 V_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])
 A_MAX = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
@@ -14,7 +14,7 @@ A_MAX = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
 
 def random_path(seed: int):
     waypoints = np.cumsum(np.random.default_rng(seed).normal(scale=0.3, size=(6, 7)), axis=0)
-    path, knots = retime._spline(waypoints)
+    path, knots = drake_spline(waypoints)
     grid = Toppra.CalcGridPoints(
         path, CalcGridPointsOptions(max_err=1e-4, max_iter=100, max_seg_length=0.02, min_points=12)
     )
@@ -24,7 +24,7 @@ def random_path(seed: int):
 @pytest.mark.parametrize("seed", range(4))
 def test_the_same_duration_as_drakes_toppra(seed):
     path, grid = random_path(seed)
-    drake = Toppra(path, retime._seven_joint_plant(), grid)
+    drake = Toppra(path, seven_joint_plant(), grid)
     drake.AddJointVelocityLimit(-V_MAX, V_MAX)
     drake.AddJointAccelerationLimit(-A_MAX, A_MAX)
     expected = drake.SolvePathParameterization().end_time()

@@ -1,5 +1,6 @@
 """drake_sim.systems.estimation.particle_filter: AMCL on the shipped arenas' ground-truth maps,
 synthetic scans (exact 2D ray casting, 1 cm noise) and drifting odometry along driven routes.
+(Its parts alone: test_likelihood_field.py, test_pose_histogram.py, test_map_refinement.py.)
 
 The helpers here (``drive``, ``drifting_odometry``, ``localise``) are also used by
 ``test_amcl.py`` and ``benchmarks/amcl_benchmark.py``.
@@ -15,9 +16,9 @@ from scipy import ndimage
 import drake_sim.systems.estimation.particle_filter as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
+from drake_sim.base.planar import compose, relative_pose, wrap_angle
 from drake_sim.base.resources import config_dir
-from drake_sim.systems.estimation.amcl import AmclConfig, load_amcl_config
-from drake_sim.systems.estimation.scan_matching_slam import compose, relative
+from drake_sim.systems.estimation.amcl_config import AmclConfig, load_amcl_config
 from drake_sim.worlds.arena import arena_footprints, arena_grid, load_arena, shipped_arenas
 from drake_sim.worlds.footprints import cast_rays
 from drake_sim.worlds.route import default_route_file, load_route
@@ -39,7 +40,7 @@ def drive(start, waypoints, duration: float) -> np.ndarray:
     for target in waypoints:
         while len(poses) <= steps:
             x, y, yaw = poses[-1]
-            turn = float(mut.wrap(math.atan2(target[1] - y, target[0] - x) - yaw))
+            turn = float(wrap_angle(math.atan2(target[1] - y, target[0] - x) - yaw))
             distance = math.hypot(target[0] - x, target[1] - y)
             if distance < 1e-9:
                 break
@@ -61,7 +62,7 @@ def drifting_odometry(truth: np.ndarray, rng, scale=0.01, yaw_per_m=YAW_DRIFT):
     a little noise (the mapping scenario's wheel calibration errors are 1 % and 0.5 %)."""
     odometry = [truth[0]]
     for before, after in zip(truth[:-1], truth[1:], strict=True):
-        step = relative(before, after)
+        step = relative_pose(before, after)
         length = math.hypot(step[0], step[1])
         step[:2] *= 1.0 + scale
         step[2] += yaw_per_m * length + rng.normal(0.0, 0.001)
@@ -103,7 +104,7 @@ def localise(name, config, seed, duration, *, offset=None, global_localization=F
             odom, ranges, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR
         ):
             estimate, _ = dut.estimate()
-            yaw_error = math.degrees(abs(float(mut.wrap(estimate[2] - pose[2]))))
+            yaw_error = math.degrees(abs(float(wrap_angle(estimate[2] - pose[2]))))
             rows.append(
                 [k / RATE, math.dist(estimate[:2], pose[:2]), yaw_error, len(dut.particles)]
             )
@@ -192,7 +193,7 @@ def test_motion_model_moves_particles_with_the_odometry_noise_of_alpha():
     np.testing.assert_allclose(along.mean(), 1.0, atol=0.01)
     np.testing.assert_allclose(along.std(), math.sqrt(0.04), rtol=0.05)  # sqrt(alpha3) * 1 m
     # Rotation noise from translation, sqrt(alpha2) * 1 m, on each of the two turns.
-    np.testing.assert_allclose(np.std(mut.wrap(p[:, 2] - math.pi / 2)), 0.2, rtol=0.05)
+    np.testing.assert_allclose(np.std(wrap_angle(p[:, 2] - math.pi / 2)), 0.2, rtol=0.05)
     np.testing.assert_allclose(np.mean(p[:, 0]), 1.0, atol=0.01)
 
 
@@ -247,42 +248,6 @@ def test_likelihood_is_ros_sum_of_cubed_beam_likelihoods_on_the_distance_field()
         expected.append(1.0 + np.sum(pz**3))
     np.testing.assert_allclose(dut.weights, np.array(expected) / sum(expected), rtol=1e-9)
     assert dut.weights[0] > 3 * dut.weights[1]
-
-
-def test_kld_limit_follows_fox_2003():
-    config = AmclConfig(min_particles=10, max_particles=100000, kld_err=0.05, kld_z=3.0)
-    k = 10
-    b = 2 / (9 * (k - 1))
-    expected = math.ceil((k - 1) / (2 * 0.05) * (1 - b + math.sqrt(b) * 3.0) ** 3)
-    assert mut.kld_limit(k, config) == expected
-    limits = mut.kld_limit(np.arange(2, 200), config)
-    assert np.all(np.diff(limits) > 0)  # more occupied bins need more particles
-    assert mut.kld_limit(1, config) == config.max_particles
-    clipped = dc.replace(config, min_particles=500, max_particles=1000)
-    assert mut.kld_limit(2, clipped) == 500 and mut.kld_limit(10**4, clipped) == 1000
-
-
-def test_estimate_is_the_heaviest_clusters_mean_with_yaw_wrapping_round():
-    dut = mut.ParticleFilter(empty_map(), AmclConfig(min_particles=10, max_particles=10), 0)
-    rng = np.random.default_rng(0)
-    near_pi = np.column_stack(
-        [
-            rng.normal(1.0, 0.02, 60),
-            rng.normal(2.0, 0.02, 60),
-            mut.wrap(math.pi + rng.normal(0.0, 0.05, 60)),
-        ]
-    )
-    elsewhere = np.column_stack(
-        [rng.normal(-3.0, 0.02, 40), rng.normal(0.0, 0.02, 40), np.zeros(40)]
-    )
-    dut.particles = np.vstack([near_pi, elsewhere])
-    dut.weights = np.full(100, 0.01)
-    dut.update([0.0, 0.0, 0.0], np.full(4, np.inf), np.zeros(4), range_max=3.5)
-    pose, covariance = dut.estimate()
-    np.testing.assert_allclose(pose[:2], near_pi[:, :2].mean(0), atol=1e-9)
-    assert abs(float(mut.wrap(pose[2] - math.pi))) < 0.02
-    assert covariance[0, 0] > 3.0  # the whole set's spread, both clusters
-    np.testing.assert_allclose(covariance, covariance.T)
 
 
 def test_global_localization_spreads_particles_over_free_cells_only():
@@ -360,7 +325,7 @@ def test_scan_match_refinement_corrects_a_biased_estimate(name, truth):
     estimate, covariance = dut.estimate()
     assert dut.refinements == [1, 0]
     assert math.dist(estimate[:2], truth[:2]) < 0.015
-    assert abs(float(mut.wrap(estimate[2] - truth[2]))) < math.radians(0.5)
+    assert abs(float(wrap_angle(estimate[2] - truth[2]))) < math.radians(0.5)
     assert dut.last_match.scores[0] > REFINED.refinement_min_score
     # Only the estimate moved: the particles (and the covariance) are the filter's.
     np.testing.assert_allclose(dut.particles, plain.particles)

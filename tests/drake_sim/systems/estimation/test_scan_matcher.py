@@ -127,17 +127,6 @@ def test_no_points_or_no_map_leave_the_pose():
     np.testing.assert_allclose(result.pose, start)
     flat = mut.match_scan(maps, np.ones((5, 2)), start)
     np.testing.assert_allclose(flat.pose, start)
-
-
-def test_helpers():
-    np.testing.assert_allclose(
-        mut.wrap_angle([math.pi, -math.pi, 3 * math.pi / 2]),
-        [
-            -math.pi,
-            -math.pi,
-            -math.pi / 2,
-        ],
-    )
     points = mut.transform_points((1.0, 2.0, math.pi / 2), np.array([[1.0, 0.0], [0.0, 1.0]]))
     np.testing.assert_allclose(points, [[1.0, 3.0], [0.0, 2.0]], atol=1e-12)
 

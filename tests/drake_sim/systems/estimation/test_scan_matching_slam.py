@@ -10,6 +10,7 @@ import pytest
 import drake_sim.systems.estimation.scan_matching_slam as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import load_map
+from drake_sim.base.planar import compose, wrap_angle
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
 from tests import slam_helpers as helpers
 
@@ -50,7 +51,7 @@ def test_slam_corrects_the_drift_of_odometry(room_run):
     odometry_final = math.hypot(*(odom[-1, :2] - truth[-1, :2]))
     assert odometry_final > 0.15  # the odometry did drift (2 % and 0.5 deg/m over ~30 m)
     assert rmse <= 0.05 and 3 * rmse <= odometry_final, (rmse, odometry_final)
-    yaw_error = mut.wrap_angle(trajectory[-1, 2] - truth[-1, 2])
+    yaw_error = wrap_angle(trajectory[-1, 2] - truth[-1, 2])
     assert abs(math.degrees(yaw_error)) < 1.0
     assert dut.rejected <= 0.02 * dut.scans and dut.degenerate <= 0.02 * dut.scans
     np.testing.assert_allclose(dut.times[:3], [0.0, 0.2, 0.4])
@@ -120,7 +121,7 @@ def test_a_featureless_corridor_falls_back_on_odometry_along_it():
     assert np.all(np.isfinite(estimate))
     # Across the corridor and in yaw the walls hold the estimate...
     assert np.abs(estimate[:, 1] - truth[:, 1]).max() < 0.03
-    assert np.abs(np.degrees(mut.wrap_angle(estimate[:, 2] - truth[:, 2]))).max() < 0.6
+    assert np.abs(np.degrees(wrap_angle(estimate[:, 2] - truth[:, 2]))).max() < 0.6
     # ...while along it, it follows the odometry's distance (3 % too long) without exploding.
     along = estimate[-1, 0] - estimate[0, 0]
     odometry_along = math.hypot(*(odom[-1, :2] - odom[0, :2]))
@@ -139,7 +140,7 @@ def test_a_match_beyond_the_gate_keeps_the_prediction():
         dut.update(ranges[0], angles, (0.0, 0.0, 0.0), range_max=3.5)
         # The odometry claims a 5 cm move sideways that did not happen.
         result = dut.update(ranges[1], angles, (0.0, 0.05, 0.0), range_max=3.5)
-        prediction = mut.compose(pose, (0.0, 0.05, 0.0))
+        prediction = compose(pose, (0.0, 0.05, 0.0))
         if expect_prediction:
             np.testing.assert_allclose(result, prediction)
             assert dut.rejected == 1
@@ -154,15 +155,9 @@ def test_scans_with_too_few_returns_are_not_matched():
     nothing = np.full(360, np.inf)
     dut.update(nothing, angles, (0.0, 0.0, 0.0), range_max=3.5)
     pose = dut.update(nothing, angles, (0.1, 0.0, 0.0), range_max=3.5)
-    np.testing.assert_allclose(pose, mut.compose((1.0, 2.0, 0.5), (0.1, 0.0, 0.0)))
+    np.testing.assert_allclose(pose, compose((1.0, 2.0, 0.5), (0.1, 0.0, 0.0)))
     assert dut.rejected == 1 and dut.last_match is None
     assert (dut.map().cells == 0).sum() > 1000  # no return: free up to range_max
-
-
-def test_pose_algebra():
-    a, b = np.array([1.0, 2.0, 0.5]), np.array([0.3, -0.2, 2.9])
-    np.testing.assert_allclose(mut.relative(a, mut.compose(a, b)), b, atol=1e-12)
-    np.testing.assert_allclose(mut.compose(a, mut.relative(a, b)), b, atol=1e-12)
 
 
 def test_map_update_thresholds():

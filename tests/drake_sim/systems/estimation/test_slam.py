@@ -5,6 +5,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
 import drake_sim.systems.estimation.slam as mut
+from drake_sim.base import planar
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
 from drake_sim.systems.sensors.lidar import LaserScan
@@ -42,7 +43,7 @@ class ScriptedSensors(LeafSystem):
 
     def _take(self, context, state):
         t = context.get_time()
-        x, y, yaw = mut.compose(true_pose(t), SENSOR)
+        x, y, yaw = planar.compose(true_pose(t), SENSOR)
         ranges = cast_rays(self._footprints, np.array([[x, y]]), ANGLES + yaw, 3.5)[0]
         scan = LaserScan(
             time=t,
@@ -101,9 +102,9 @@ def test_the_slam_corrects_the_odometry_drift(finished):
 def test_the_pose_output_moves_on_with_the_odometry_between_scans(finished):
     dut, context = finished
     t = context.get_time()  # 10.1: 0.1 s after the last scan
-    expected = mut.compose(
+    expected = planar.compose(
         dut.history(context)[-1, 1:4],
-        mut.relative(odometry_pose(10.0 + mut.SCAN_DELAY), odometry_pose(t)),
+        planar.relative_pose(odometry_pose(10.0 + mut.SCAN_DELAY), odometry_pose(t)),
     )
     assert dut.GetOutputPort("pose").Eval(context) == pytest.approx(expected)
 

@@ -13,7 +13,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 import drake_sim.systems.sensors.lidar as mut
+from drake_sim.base.config import apply_overrides, load_typed
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
 
 SCAN_Z = 0.17  # m, the lidar's height in these scenes
 HEIGHT = 0.3  # m, of the obstacles
@@ -323,7 +325,8 @@ def test_laser_scan_value():
 
 def test_presets_and_fan():
     lds = mut.load_lidar_config(mut.lidar_preset_file("lds_01"))
-    assert lds == mut.LidarConfig(angle_min_deg=-180.0)
+    assert lds == mut.LidarConfig(angle_min_deg=-180.0)  # the defaults are the LDS-01
+    assert lds.fan() == mut.LidarConfig().fan()
     angles = np.degrees(lds.fan().angles())
     np.testing.assert_allclose(angles[[0, 1, -1]], [-180.0, -179.0, 179.0])
     sick = mut.load_lidar_config(mut.lidar_preset_file("sick_tim571"))
@@ -376,3 +379,38 @@ def test_bad_config_names_file_and_key(tmp_path, text, key):
 def test_bad_config_object_is_refused():
     with pytest.raises(ConfigError, match="range_min"):
         mut.Lidar(plant=None, frame=None, config=mut.LidarConfig(range_min=5.0))
+
+
+@dc.dataclass
+class _Scenario:
+    lidar: mut.LidarConfig = dc.field(default_factory=mut.LidarConfig)
+
+
+def test_lidar_config_by_name_or_path(tmp_path):
+    sick = mut.lidar_config("sick_tim571")
+    assert sick == mut.load_lidar_config(config_dir() / "lidars" / "sick_tim571.yaml")
+    assert mut.lidar_config(mut.lidar_preset_file("sick_tim571")) == sick
+    assert mut.lidar_config("lds_01") == mut.LidarConfig(angle_min_deg=-180.0)
+    path = tmp_path / "slow.yaml"
+    path.write_text("rate: 1.0\n")
+    assert mut.lidar_config(path) == mut.LidarConfig(rate=1.0)
+    assert mut.lidar_config(str(path)) == mut.LidarConfig(rate=1.0)
+    with pytest.raises(ConfigError) as info:
+        mut.lidar_config("lds_02", where="--lidar")
+    message = str(info.value)
+    assert message.startswith("--lidar: unknown lidars preset 'lds_02'")
+    assert "lds_01" in message and "sick_tim571" in message
+    path.write_text("rate: 0\n")
+    with pytest.raises(ConfigError, match="'rate' must be positive"):
+        mut.lidar_config(path)
+
+
+def test_a_scenario_names_its_lidar():
+    scenario = load_typed(_Scenario, data="lidar: lds_01  # the TurtleBot3's")
+    assert scenario.lidar == mut.lidar_config("lds_01")
+    scenario = apply_overrides(_Scenario, scenario, ["lidar=sick_tim571"])
+    assert scenario.lidar == mut.lidar_config("sick_tim571")
+    scenario = apply_overrides(_Scenario, scenario, ["lidar.noise_sigma=0.03"])
+    assert scenario.lidar == dc.replace(mut.lidar_config("sick_tim571"), noise_sigma=0.03)
+    with pytest.raises(ConfigError, match="'lidar': unknown lidars preset 'sick' .known: lds_01"):
+        apply_overrides(_Scenario, scenario, ["lidar=sick"])

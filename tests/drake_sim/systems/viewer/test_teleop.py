@@ -8,7 +8,7 @@ from pydrake.geometry import StartMeshcat
 from pydrake.systems.analysis import Simulator
 
 import drake_sim.systems.viewer.teleop as mut
-from drake_sim.flip_run import FlipRun
+from drake_sim.runs.flip import FlipRun
 from tests.flip_helpers import default_robot, flip_scenario
 
 
@@ -44,7 +44,7 @@ def test_teleop_drives_the_robot(meshcat):
     straight on and does not flip."""
     run = FlipRun(flip_scenario(), default_robot(), meshcat=meshcat, controller="teleop")
     _press(meshcat, mut.BUTTONS[0][0], 5)
-    run.advance_to(2.0)
+    assert run.run(2.0) == "duration", run.failure
     twist = run.diagram.GetOutputPort("odometry_twist").Eval(run.context)
     assert twist[0] == pytest.approx(0.5, abs=0.02)
     truth = run.log("true_pose").data()

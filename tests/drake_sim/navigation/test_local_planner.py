@@ -1,0 +1,174 @@
+import math
+
+import numpy as np
+import pytest
+
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.planar import wrap_angle
+from drake_sim.navigation import costmap as cm
+from drake_sim.navigation import local_planner as mut
+
+
+def _room(boxes=(), size=4.0, resolution=0.05):
+    """A walled square room [0, size]^2 with axis-aligned boxes (x0, y0, x1, y1)."""
+    n = round(size / resolution)
+    centres = (np.arange(n) + 0.5) * resolution
+    xs, ys = np.meshgrid(centres, centres)
+    occupied = (xs < 0.1) | (ys < 0.1) | (xs > size - 0.1) | (ys > size - 0.1)
+    for x0, y0, x1, y1 in boxes:
+        occupied |= (xs >= x0) & (xs <= x1) & (ys >= y0) & (ys <= y1)
+    static = np.where(occupied, cm.LETHAL, cm.FREE_SPACE)
+    return cm.Costmap(static, resolution, (0.0, 0.0, 0.0), cm.CostmapConfig())
+
+
+def test_rollouts_are_exact_arcs_and_lines():
+    poses = mut.rollouts([1.0, 2.0, 0.5], [0.2, 1.0], [0.0, 1.0], math.pi / 10, 10)
+    assert poses.shape == (2, 10, 3)
+    assert poses[0, -1] == pytest.approx(
+        [1.0 + 0.2 * math.pi * math.cos(0.5), 2.0 + 0.2 * math.pi * math.sin(0.5), 0.5]
+    )
+    # A half circle of radius 1 from heading 0.5: ends 2 m to the left of the start.
+    assert poses[1, -1, :2] == pytest.approx([1.0 - 2 * math.sin(0.5), 2.0 + 2 * math.cos(0.5)])
+    assert poses[1, -1, 2] == pytest.approx(0.5 + math.pi)
+
+
+def test_densify_keeps_vertices_and_spacing():
+    path = mut.densify([[0.0, 0.0], [1.0, 0.0], [1.0, 0.33]], 0.1)
+    assert np.max(np.hypot(*np.diff(path, axis=0).T)) <= 0.1 + 1e-12
+    for vertex in ([0.0, 0.0], [1.0, 0.0], [1.0, 0.33]):
+        assert np.min(np.hypot(*(path - vertex).T)) < 1e-12
+    assert len(mut.densify([[1.0, 2.0]], 0.1)) == 1
+
+
+def test_drives_along_a_clear_path_within_the_acceleration_limits():
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    path = np.array([[0.5, 2.0], [3.5, 2.0]])
+    command = dut.compute([0.5, 2.0, 0.0], (0.0, 0.0), path, [3.5, 2.0, 0.0], _room())
+    assert command.status == "following"
+    assert 0.0 < command.v <= dut.config.acc_lim_x * dut.period + 1e-12
+    assert abs(command.omega) <= dut.config.acc_lim_theta * dut.period + 1e-12
+    command = dut.compute([0.5, 2.0, 0.0], (0.2, 0.0), path, [3.5, 2.0, 0.0], _room())
+    assert command.v == pytest.approx(dut.config.max_vel_x)
+    assert abs(command.omega) < 0.2
+    assert command.trajectory.shape[1] == 3 and command.trajectory[-1, 0] > 0.8
+
+
+def test_turns_on_the_spot_to_a_path_behind():
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    path = np.array([[2.0, 2.0], [0.5, 2.0]])
+    command = dut.compute([2.0, 2.0, 0.0], (0.0, 0.0), path, [0.5, 2.0, 0.0], _room())
+    assert command.status == "following" and command.v == 0.0 and command.omega != 0.0
+    # Moving: it slows down within the acceleration limit, already turning.
+    command = dut.compute([2.0, 2.0, 0.0], (0.2, 0.0), path, [0.5, 2.0, 0.0], _room())
+    assert command.v == pytest.approx(0.2 - dut.config.acc_lim_x * dut.period)
+    assert abs(command.omega) == pytest.approx(dut.config.acc_lim_theta * dut.period)
+
+
+def test_no_valid_trajectory_when_boxed_in():
+    boxed = _room()
+    boxed.costs[:] = cm.INSCRIBED
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    command = dut.compute([2.0, 2.0, 0.0], (0.1, 0.0), [[2, 2], [3, 2]], [3, 2, 0], boxed)
+    assert command.status == "no_valid_trajectory"
+    assert (command.v, command.omega) == (0.0, 0.0)
+
+
+def test_rotates_to_the_goal_yaw_then_arrives():
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    goal = [2.0, 2.0, 1.0]
+    command = dut.compute([2.01, 2.0, 0.0], (0.0, 0.0), [[2.0, 2.0]], goal, _room())
+    assert command.status == "rotating_to_goal" and command.v == 0.0 and command.omega > 0
+    command = dut.compute([2.01, 2.0, 2.5], (0.0, 0.0), [[2.0, 2.0]], goal, _room())
+    assert command.status == "rotating_to_goal" and command.omega < 0
+    command = dut.compute([2.01, 2.0, 0.98], (0.0, 0.0), [[2.0, 2.0]], goal, _room())
+    assert command.status == "arrived" and (command.v, command.omega) == (0.0, 0.0)
+
+
+def test_drives_out_of_the_inscribed_zone_but_never_into_it():
+    costmap = _room(boxes=[(2.0, 1.0, 2.4, 3.0)])  # a box 0.15 m ahead of x = 1.85
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    path, goal = np.array([[1.85, 2.0], [1.0, 2.0]]), [1.0, 2.0, math.pi]
+    assert costmap.cost_at([1.85, 2.0]) == cm.INSCRIBED
+    command = dut.compute([1.85, 2.0, math.pi], (0.0, 0.0), path, goal, costmap)
+    assert command.status == "following" and command.v > 0.0
+    # From just outside the inscribed zone, no rollout may enter it (not even a little).
+    command = dut.compute([1.74, 2.0, 0.0], (0.2, 0.0), [[1.74, 2.0], [1.9, 2.0]], goal, costmap)
+    assert command.status == "no_valid_trajectory" or np.all(
+        costmap.cost_at(command.trajectory[:, :2]) < cm.INSCRIBED
+    )
+
+
+def _simulate(dut, costmap, start, path, goal, duration, lag=0.05):
+    """Closed loop: the unicycle follows the command with a first-order lag (s), at 100 Hz."""
+    pose = np.array(start, dtype=float)
+    velocity = np.zeros(2)
+    command = np.zeros(2)
+    poses, statuses = [pose.copy()], []
+    for step in range(round(duration * 100)):
+        if step % round(100 * dut.period) == 0:
+            result = dut.compute(pose, velocity, path, goal, costmap)
+            command = np.array([result.v, result.omega])
+            statuses.append(result.status)
+            if result.status == "arrived":
+                break
+        velocity += (command - velocity) * (0.01 / lag)
+        v, omega = velocity
+        pose += 0.01 * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), omega])
+        poses.append(pose.copy())
+    return np.array(poses), statuses
+
+
+def test_closed_loop_avoids_a_box_on_the_path_and_stops_precisely_at_the_goal():
+    # A box sits across the straight path: the path (from a global planner) goes round it;
+    # the DWA must follow it without entering the inscribed zone, and stop within tolerance.
+    costmap = _room(boxes=[(1.8, 1.4, 2.2, 2.6)])
+    path = np.array([[0.6, 2.0], [1.3, 2.0], [1.5, 3.05], [2.5, 3.05], [2.7, 2.0], [3.4, 2.0]])
+    goal = [3.4, 2.0, -math.pi / 2]
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    poses, statuses = _simulate(dut, costmap, [0.6, 2.0, 0.0], path, goal, 60.0)
+    assert statuses[-1] == "arrived"
+    assert "rotating_to_goal" in statuses
+    assert np.hypot(*(poses[-1, :2] - goal[:2])) < 0.05
+    assert abs(wrap_angle(poses[-1, 2] - goal[2])) < math.radians(10)
+    assert np.all(costmap.cost_at(poses[:, :2]) < cm.INSCRIBED)
+    # Time: well under 2.5 x the path length over the robot's top speed (0.26 m/s).
+    length = np.sum(np.hypot(*np.diff(path, axis=0).T))
+    assert len(poses) / 100 < 2.5 * length / 0.26
+
+
+@pytest.mark.parametrize("yaw", [0.0, math.pi, -2.0])
+def test_final_approach_from_any_heading_is_precise(yaw):
+    costmap = _room()
+    goal = [2.3, 2.1, 0.7]
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    poses, statuses = _simulate(dut, costmap, [2.0, 2.0, yaw], [[2.0, 2.0], goal[:2]], goal, 20)
+    assert statuses[-1] == "arrived"
+    assert np.hypot(*(poses[-1, :2] - goal[:2])) < 0.05
+    assert abs(wrap_angle(poses[-1, 2] - goal[2])) < math.radians(10)
+
+
+def test_default_config_is_valid():
+    config = mut.check_dwa_config(mut.DwaConfig())
+    assert config.max_vel_x <= 0.26 and config.max_vel_theta <= 1.82
+    assert config.xy_goal_tolerance == 0.05
+
+
+@pytest.mark.parametrize(
+    "key, value",
+    [
+        ("max_vel_x", 0.0),
+        ("max_vel_x", math.nan),
+        ("acc_lim_theta", -1.0),
+        ("sim_time", math.inf),
+        ("min_vel_x", 0.1),
+        ("vx_samples", 1),
+        ("occdist_scale", -0.1),
+        ("goal_precision", 1.5),
+        ("min_vel_theta", 5.0),
+    ],
+)
+def test_bad_config_values_are_rejected(key, value):
+    with pytest.raises(ConfigError, match=key):
+        mut.check_dwa_config(mut.DwaConfig(**{key: value}), "nav.yaml: controller")
+    with pytest.raises(ConfigError, match="nav.yaml"):
+        mut.check_dwa_config(mut.DwaConfig(**{key: value}), "nav.yaml: controller")
