@@ -19,12 +19,10 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from diagrams.pickplace_scenario import load_pickplace_scenario
-from diagrams.planning_station import make_planning_station
 from drake_sim.base.cli import output_file
 from drake_sim.base.files import write_atomic
+from drake_sim.runs.pickplace import RECIPE
 from planning import planner_kernels
-from planning.task.pick_place import PickPlaceTask
 from planning.task.scene_generator import random_scene
 
 
@@ -32,9 +30,12 @@ def _progress(items, label):
     return tqdm(items, desc=label, leave=False, file=sys.stderr, disable=None)
 
 
-def run_one(config, mode):
-    report = PickPlaceTask(make_planning_station(config, mode=mode), config.task).run()
-    return report.to_dict()
+def run_one(inputs, mode, scene=None):
+    """One task through the app's recipe, in ``mode`` (on ``scene`` when given): its report."""
+    scenario = dc.replace(inputs.scenario, mode=mode, scene=scene or inputs.scenario.scene)
+    run = RECIPE.make_run(dc.replace(inputs, scenario=scenario), {})
+    run.run()
+    return run.task_report.to_dict()
 
 
 COLUMNS = [
@@ -106,16 +107,15 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     # Measure the compiled planner: on a fresh install, wait for its kernels' build.
     planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("benchmark"))
-    config = load_pickplace_scenario(args.scenario)
+    inputs = RECIPE.load(scenario=args.scenario)
+    config = inputs.scenario
     results, summaries = {}, []
     for mode in args.modes:
-        rows = [run_one(config, mode) for _ in _progress(range(args.repeats), f"{mode} default")]
+        rows = [run_one(inputs, mode) for _ in _progress(range(args.repeats), f"{mode} default")]
         summaries.append(summarize(mode, f"default x{args.repeats}", rows))
         rng = np.random.default_rng(args.seed)
         scenes = [random_scene(rng, config.scene) for _ in range(args.random)]
-        random_rows = [
-            run_one(dc.replace(config, scene=s), mode) for s in _progress(scenes, f"{mode} random")
-        ]
+        random_rows = [run_one(inputs, mode, s) for s in _progress(scenes, f"{mode} random")]
         if random_rows:
             summaries.append(summarize(mode, f"{args.random} random", random_rows))
         results[mode] = {"default": rows, "random": random_rows}

@@ -4,6 +4,7 @@ import dataclasses as dc
 import math
 
 from diagrams.world_scenario import WorldScenario, check_world_scenario, load_scenario
+from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.errors import ConfigError
 from drake_sim.systems.control.diff_drive_controller import DiffDriveConfig
 from drake_sim.systems.control.flip_controller import FlipConfig
@@ -41,10 +42,7 @@ def check_flip_scenario(scenario: FlipScenario, filename: str = "scenario") -> N
             zero_ok = zero_ok or field.name == "integral_time"
             if value < 0 or (value == 0 and not zero_ok):
                 raise ConfigError(f"{filename}: '{key}' must be > 0, got {value!r}")
-    for key in ("log_period", "trail_period"):
-        value = getattr(scenario, key)
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"{filename}: '{key}' must be finite and > 0, got {value!r}")
+    require_positive(filename, fields_of(scenario, ("log_period", "trail_period")))
 
 
 def load_flip_scenario(filename) -> FlipScenario:

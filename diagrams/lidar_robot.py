@@ -7,12 +7,15 @@ the scan (SLAM, or AMCL and the navigator).
 """
 
 import dataclasses as dc
+import math
 
 import numpy as np
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant
 from pydrake.systems.framework import DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import MatrixGain
 
+from drake_sim.base.checks import fields_of, require_positive
+from drake_sim.base.errors import ConfigError
 from drake_sim.robots.turtlebot3 import (
     BASE_FOOTPRINT,
     LIDAR_FRAME,
@@ -23,8 +26,12 @@ from drake_sim.robots.turtlebot3 import (
 )
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.control.diff_drive_controller import DiffDriveConfig, DiffDriveController
-from drake_sim.systems.estimation.encoder_odometry import EncoderOdometry, PlanarGroundTruth
-from drake_sim.systems.sensors.lidar import add_lidar
+from drake_sim.systems.estimation.encoder_odometry import (
+    EncoderOdometry,
+    PlanarGroundTruth,
+    check_config,
+)
+from drake_sim.systems.sensors.lidar import add_lidar, check_lidar_config
 from drake_sim.worlds.arena import Arena
 from drake_sim.worlds.arena_world import add_arena
 
@@ -44,6 +51,22 @@ class LidarRobotParts:
     odometry_twist: OutputPort  # [v, omega] from the wheel encoders.
     scan: OutputPort  # LaserScan.
     X_base_sensor: tuple[float, float, float]  # The lidar's planar pose on the base.
+
+
+def check_lidar_robot_scenario(scenario, where: str) -> None:
+    """Checks what a ``MappingScenario`` and a ``NavigationScenario`` share: the lidar, the
+    odometry, a discrete plant, the drive rate, the log period and the seed.
+
+    Raises:
+        ConfigError: naming ``where`` and the first bad key.
+    """
+    check_lidar_config(scenario.lidar, f"{where}: lidar")
+    check_config(scenario.odometry, where, prefix="odometry.")
+    if not (math.isfinite(scenario.plant.time_step) and scenario.plant.time_step > 0):
+        raise ConfigError(f"{where}: 'plant.time_step' must be > 0 (a discrete plant)")
+    require_positive(where, fields_of(scenario, ("drive_rate", "log_period")))
+    if scenario.random_seed < 0:
+        raise ConfigError(f"{where}: 'random_seed' must be >= 0, got {scenario.random_seed}")
 
 
 def add_lidar_robot(

@@ -3,22 +3,20 @@ wheel odometry's errors, the SLAM, the route follower, the plant and the viewer.
 ``config/mapping_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
-import functools
-import math
 from pathlib import Path
 
 from pydrake.multibody.plant import MultibodyPlantConfig
 
-from drake_sim.base.config import load_checked
-from drake_sim.base.errors import ConfigError
+from diagrams.lidar_robot import check_lidar_robot_scenario
+from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.control.route_follower import (
     RouteFollowerConfig,
     check_route_follower_config,
 )
-from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig, check_config
+from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig
 from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
-from drake_sim.systems.sensors.lidar import LidarConfig, check_lidar_config
+from drake_sim.systems.sensors.lidar import LidarConfig
 
 
 @dc.dataclass
@@ -50,25 +48,11 @@ class MappingScenario:
 
 def check_mapping_scenario(scenario: MappingScenario, where: str = "scenario") -> MappingScenario:
     """Returns ``scenario`` if valid; raises ``ConfigError`` naming ``where`` and the key."""
-    check_lidar_config(scenario.lidar, f"{where}: lidar")
-    check_config(scenario.odometry, where, prefix="odometry.")
+    check_lidar_robot_scenario(scenario, where)
     scenario.slam.check(f"{where}: slam")
     check_route_follower_config(scenario.route_follower, f"{where}: route_follower")
-    if not (math.isfinite(scenario.plant.time_step) and scenario.plant.time_step > 0):
-        raise ConfigError(f"{where}: 'plant.time_step' must be > 0 (a discrete plant)")
-    for key in (
-        "drive_rate",
-        "map_view_period",
-        "record_map_period",
-        "log_period",
-        "duration_factor",
-        "duration_margin",
-    ):
-        value = getattr(scenario, key)
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"{where}: '{key}' must be finite and > 0, got {value!r}")
-    if scenario.random_seed < 0:
-        raise ConfigError(f"{where}: 'random_seed' must be >= 0, got {scenario.random_seed}")
+    keys = ("map_view_period", "record_map_period", "duration_factor", "duration_margin")
+    require_positive(where, fields_of(scenario, keys))
     return scenario
 
 
@@ -81,11 +65,3 @@ def config_path(name: str) -> Path:
 def default_scenario_file() -> Path:
     """Returns ``config/mapping_scenario.yaml``."""
     return config_dir() / "mapping_scenario.yaml"
-
-
-load_mapping_scenario = functools.partial(
-    load_checked, MappingScenario, check=check_mapping_scenario, what="scenario file"
-)
-"""``load_mapping_scenario(filename, *, defaults=None)``: the file into a ``MappingScenario``
-(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
-a ``ConfigError`` names the file and the key at fault."""

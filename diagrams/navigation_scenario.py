@@ -4,15 +4,13 @@
 in ``config/navigation_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
-import functools
-import math
 from pathlib import Path
 
 from pydrake.multibody.plant import MultibodyPlantConfig
 
+from diagrams.lidar_robot import check_lidar_robot_scenario
 from diagrams.mapping_scenario import config_path
-from drake_sim.base.config import load_checked
-from drake_sim.base.errors import ConfigError
+from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.resources import config_dir
 from drake_sim.navigation.navigator import NavigatorConfig, check_navigator_config
 from drake_sim.systems.estimation.amcl import (
@@ -21,11 +19,11 @@ from drake_sim.systems.estimation.amcl import (
     default_amcl_config_file,
     load_amcl_config,
 )
-from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig, check_config
-from drake_sim.systems.sensors.lidar import LidarConfig, check_lidar_config
+from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig
+from drake_sim.systems.sensors.lidar import LidarConfig
 from drake_sim.worlds.arena import Arena, BoxSpec, CylinderSpec, ObstacleSpec, check_arena
 
-__all__ = ["NavigationScenario", "config_path", "load_navigation_scenario"]
+__all__ = ["NavigationScenario", "check_navigation_scenario", "config_path"]
 
 
 @dc.dataclass
@@ -72,18 +70,11 @@ def check_navigation_scenario(
     scenario: NavigationScenario, where: str = "scenario"
 ) -> NavigationScenario:
     """Returns ``scenario`` if valid; raises ``ConfigError`` naming ``where`` and the key."""
-    check_lidar_config(scenario.lidar, f"{where}: lidar")
-    check_config(scenario.odometry, where, prefix="odometry.")
+    check_lidar_robot_scenario(scenario, where)
     check_amcl_config(scenario.amcl, where, prefix="amcl.")
     check_navigator_config(scenario.navigator, f"{where}: navigator")
-    if not (math.isfinite(scenario.plant.time_step) and scenario.plant.time_step > 0):
-        raise ConfigError(f"{where}: 'plant.time_step' must be > 0 (a discrete plant)")
-    for key in ("drive_rate", "goal_time_factor", "goal_time_margin", "log_period", "view_period"):
-        value = getattr(scenario, key)
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"{where}: '{key}' must be finite and > 0, got {value!r}")
-    if scenario.random_seed < 0:
-        raise ConfigError(f"{where}: 'random_seed' must be >= 0, got {scenario.random_seed}")
+    keys = ("goal_time_factor", "goal_time_margin", "view_period")
+    require_positive(where, fields_of(scenario, keys))
     return scenario
 
 
@@ -103,11 +94,3 @@ def world_arena(scenario: NavigationScenario, arena: Arena, where: str = "scenar
 def default_scenario_file() -> Path:
     """Returns ``config/navigation_scenario.yaml``."""
     return config_dir() / "navigation_scenario.yaml"
-
-
-load_navigation_scenario = functools.partial(
-    load_checked, NavigationScenario, check=check_navigation_scenario, what="scenario file"
-)
-"""``load_navigation_scenario(filename, *, defaults=None)``: the file into a ``NavigationScenario``
-(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
-a ``ConfigError`` names the file and the key at fault."""

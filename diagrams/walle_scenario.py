@@ -3,12 +3,10 @@ line detector and follower, and the robot's own sensors, controllers and pushes 
 ``WalleBalanceScenario``). Values live in ``config/walle_scenario.yaml``; units in comments."""
 
 import dataclasses as dc
-import functools
 import math
 from pathlib import Path
 
 from diagrams.walle_balance_scenario import WalleBalanceScenario, check_walle_balance_scenario
-from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.systems.control.balance_controller import CONTROLLERS
@@ -76,14 +74,6 @@ def check_walle_scenario(scenario: WalleScenario, filename: str = "scenario") ->
         if not (math.isfinite(value) and value >= 0):
             raise ConfigError(f"{filename}: '{key}' must be finite and >= 0, got {value!r}")
     return scenario
-
-
-load_walle_scenario = functools.partial(
-    load_checked, WalleScenario, check=check_walle_scenario, what="scenario file"
-)
-"""``load_walle_scenario(filename, *, defaults=None)``: the file into a ``WalleScenario``
-(unknown keys are errors; missing keys keep ``defaults``, the schema's own when None), checked;
-a ``ConfigError`` names the file and the key at fault."""
 
 
 def default_scenario_file() -> Path:

@@ -3,12 +3,12 @@ mapping run would save) or by a mapping run, the robot and the scenario."""
 
 import numpy as np
 
-from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
 from drake_sim.base.map_files import OccupancyMap, load_map, save_map
 from drake_sim.base.resources import config_dir
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
 from drake_sim.runs.mapping import RECIPE as MAPPING
+from drake_sim.runs.navigate import RECIPE as NAVIGATE
 from drake_sim.worlds.arena import arena_grid, load_arena
 
 
@@ -17,7 +17,7 @@ def robot():
 
 
 def scenario():
-    return load_navigation_scenario(default_scenario_file())
+    return NAVIGATE.scenario.read(None)
 
 
 def arena_file(name: str):

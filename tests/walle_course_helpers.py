@@ -1,9 +1,9 @@
 """Shared set-up for the Wall-E course tests: the shipped robot and scenario, and the report's
 contract keys (DESIGN.md, Wall-E course)."""
 
-from diagrams.walle_scenario import default_scenario_file, load_walle_scenario
 from drake_sim.robots.walle import default_robot_file
 from drake_sim.robots.walle_params import load_walle_params
+from drake_sim.runs.walle import RECIPE as WALLE
 
 REPORT_KEYS = frozenset(
     [
@@ -25,4 +25,4 @@ REPORT_KEYS = frozenset(
 
 def walle_robot_and_scenario():
     """Returns config/walle.yaml's robot and config/walle_scenario.yaml's scenario."""
-    return load_walle_params(default_robot_file()), load_walle_scenario(default_scenario_file())
+    return load_walle_params(default_robot_file()), WALLE.scenario.read(None)

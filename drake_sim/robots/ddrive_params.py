@@ -10,6 +10,7 @@ import dataclasses as dc
 import math
 from pathlib import Path
 
+from drake_sim.base.checks import require_positive
 from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.params_common import RobotParamsBase, number_fields, write_params
@@ -108,9 +109,7 @@ def validate(params: RobotParams, filename: str = "robot") -> RobotParams:
     Raises:
         ConfigError: naming the first bad key.
     """
-    for key, value in number_fields(params, filename):
-        if not math.isfinite(value) or value <= 0:
-            raise ConfigError(f"{filename}: '{key}' must be finite and > 0, got {value!r}")
+    require_positive(filename, number_fields(params, filename))
     b, w, c = params.body, params.wheel, params.caster
     corner = math.hypot(b.length / 2 - params.axle_x, b.height / 2)  # axle to front corner
     if w.radius <= corner:

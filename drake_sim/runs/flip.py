@@ -10,7 +10,6 @@ import dataclasses as dc
 import math
 
 import numpy as np
-from pydrake.geometry import Meshcat
 
 from diagrams.flip import make_flip_diagram
 from diagrams.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
@@ -103,26 +102,19 @@ class FlipRun(SimulationRun):
     Args:
         scenario: world, sensors and controllers; its ``scene.random_seed`` seeds the IMU noise.
         robot: the robot's dimensions.
-        meshcat: draw there, or None to run headless.
         realtime: pace the run with ``scenario.scene.simulator`` (its real-time rate); by
             default, when there is a ``meshcat``. Otherwise it runs flat out.
-        controller: "flip", "teleop" (Meshcat keys; needs ``meshcat``) or "cmd_vel" (fix or
-            connect the diagram's ``cmd_vel`` input); see ``diagrams.flip.CONTROLLERS``.
+        diagram: ``make_flip_diagram``'s keywords: ``meshcat`` (draw there; None: headless)
+            and ``controller``: "flip" (the default), "teleop" (Meshcat keys; needs
+            ``meshcat``) or "cmd_vel" (fix or connect the diagram's ``cmd_vel`` input).
     """
 
-    def __init__(
-        self,
-        scenario: FlipScenario,
-        robot: RobotParams,
-        *,
-        meshcat: Meshcat | None = None,
-        realtime: bool | None = None,
-        controller: str = "flip",
-    ):
+    def __init__(self, scenario: FlipScenario, robot: RobotParams, *, realtime=None, **diagram):
         self.scenario = scenario
-        self.controller = controller
-        diagram = make_flip_diagram(scenario, robot, meshcat=meshcat, controller=controller)
+        self.controller = diagram.setdefault("controller", "flip")
+        meshcat = diagram.get("meshcat")
         pacing = {"realtime": realtime, "config": scenario.scene.simulator, "meshcat": meshcat}
+        diagram = make_flip_diagram(scenario, robot, **diagram)
         super().__init__(diagram, scenario.scene.random_seed, **pacing)
 
     def default_duration(self, *, viewer: bool = False) -> float:

@@ -15,7 +15,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-from pydrake.geometry import Meshcat
 
 from diagrams.mapping import make_mapping_diagram
 from diagrams.mapping_scenario import (
@@ -23,7 +22,6 @@ from diagrams.mapping_scenario import (
     check_mapping_scenario,
     config_path,
     default_scenario_file,
-    load_mapping_scenario,
 )
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
@@ -76,9 +74,10 @@ def route_length(start, waypoints) -> float:
 
 class MappingRun(SimulationRun):
     """Builds the mapping diagram and a simulator for one run; ``run`` drives, ``save_map``
-    writes map_server files and ``report`` scores the map and the poses. ``keyframes``: keep
-    the growing map and the scans in a Meshcat recording (``make_mapping_diagram``); ``out``:
-    where ``finish`` saves the map (``maps/<arena>`` when None). The scenario's
+    writes map_server files and ``report`` scores the map and the poses. ``diagram``:
+    ``make_mapping_diagram``'s keywords (``meshcat``, ``teleop``: the Meshcat keys drive
+    instead of the route, ``keyframes``: keep the growing map in a Meshcat recording);
+    ``out``: where ``finish`` saves the map (``maps/<arena>`` when None). The scenario's
     ``random_seed`` seeds the odometry errors and the lidar noise."""
 
     check_period = CHECK_PERIOD
@@ -91,31 +90,21 @@ class MappingRun(SimulationRun):
         arena: Arena,
         waypoints,
         *,
-        meshcat: Meshcat | None = None,
         realtime: bool = False,
-        teleop: bool = False,
-        keyframes: bool = False,
         out: Path | str | None = None,
         arena_file: Path | str = "arena",
+        **diagram,
     ):
         self.scenario = scenario
         self.robot = robot
         self.arena = arena
         self.waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
-        self.teleop = teleop
-        diagram = make_mapping_diagram(
-            scenario,
-            robot,
-            arena,
-            self.waypoints,
-            meshcat=meshcat,
-            teleop=teleop,
-            keyframes=keyframes,
-        )
+        self.teleop = diagram.get("teleop", False)
+        diagram = make_mapping_diagram(scenario, robot, arena, self.waypoints, **diagram)
         super().__init__(diagram, scenario.random_seed, realtime=realtime)
         self._slam = self.diagram.GetSubsystemByName("slam")
         self._truth_log = self.diagram.GetSubsystemByName("log_true_pose")
-        self._route = self.diagram.GetSubsystemByName("route_follower") if not teleop else None
+        self._route = self.diagram.GetSubsystemByName("route_follower") if not self.teleop else None
         self.map_files: list[str] | None = None
         self.arena_file = Path(arena_file)  # named in the summary line
         self.out = Path(out) if out is not None else Path(DEFAULT_OUT) / self.arena_file.stem
@@ -288,9 +277,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
 RECIPE = AppRecipe(
     name="mapping",
     robot=ROBOT_FILE,
-    scenario=InputFile(
-        MappingScenario, default_scenario_file, check_mapping_scenario, load=load_mapping_scenario
-    ),
+    scenario=InputFile(MappingScenario, default_scenario_file, check_mapping_scenario),
     seed_key="random_seed",
     make_run=make_run,
     flags=(

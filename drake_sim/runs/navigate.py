@@ -16,7 +16,6 @@ from diagrams.navigation_scenario import (
     check_navigation_scenario,
     config_path,
     default_scenario_file,
-    load_navigation_scenario,
     world_arena,
 )
 from drake_sim.base import cli
@@ -38,10 +37,10 @@ class NavigateRun(NavigationRun):
     """A ``NavigationRun`` as the CLI drives it: from the command line's goals, or from the
     Meshcat page's (``interactive``) until Ctrl-C."""
 
-    def __init__(self, *args, interactive: bool = False, **kwargs):
-        super().__init__(*args, **kwargs)
-        self.occupancy_map = kwargs["occupancy_map"]
-        self.start = np.asarray(kwargs["start"], dtype=float)
+    def __init__(self, scenario, robot, world, occupancy_map, *, start, interactive=False, **kw):
+        super().__init__(scenario, robot, world, occupancy_map, start=start, **kw)
+        self.occupancy_map = occupancy_map
+        self.start = np.asarray(start, dtype=float)
         self.interactive = interactive
 
     def default_duration(self, *, viewer: bool = False) -> float:
@@ -206,12 +205,7 @@ def _pose_flag(name: str, help_text: str, group: str) -> Flag:
 RECIPE = AppRecipe(
     name="navigate",
     robot=ROBOT_FILE,
-    scenario=InputFile(
-        NavigationScenario,
-        default_scenario_file,
-        check_navigation_scenario,
-        load=load_navigation_scenario,
-    ),
+    scenario=InputFile(NavigationScenario, default_scenario_file, check_navigation_scenario),
     seed_key="random_seed",
     make_run=make_run,
     flags=(

@@ -20,7 +20,6 @@ from diagrams.walle_scenario import (
     check_walle_scenario,
     course_path,
     default_scenario_file,
-    load_walle_scenario,
 )
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.report import RunReport, run_times
@@ -223,9 +222,7 @@ RECIPE = AppRecipe(
     robot=InputFile(
         WalleParams, default_robot_file, validate, what="robot file", load=load_walle_params
     ),
-    scenario=InputFile(
-        WalleScenario, default_scenario_file, check_walle_scenario, load=load_walle_scenario
-    ),
+    scenario=InputFile(WalleScenario, default_scenario_file, check_walle_scenario),
     seed_key="walle.random_seed",
     make_run=make_run,
     flags=(

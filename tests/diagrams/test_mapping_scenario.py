@@ -3,11 +3,12 @@ import math
 import pytest
 
 import diagrams.mapping_scenario as mut
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 
 
 def test_the_shipped_scenario_loads_and_names_files_that_exist():
-    scenario = mut.load_mapping_scenario(mut.default_scenario_file())
+    scenario = load(mut.MappingScenario, mut.check_mapping_scenario, mut.default_scenario_file())
     assert mut.config_path(scenario.arena).is_file()
     assert scenario.lidar.samples == 360 and scenario.lidar.rate == 5.0
     assert scenario.plant.time_step > 0
@@ -39,7 +40,7 @@ def test_bad_values_name_the_file_and_key(tmp_path, text, needle):
     path = tmp_path / "scenario.yaml"
     path.write_text(text)
     with pytest.raises(ConfigError, match=needle) as raised:
-        mut.load_mapping_scenario(path)
+        load(mut.MappingScenario, mut.check_mapping_scenario, path)
     assert "scenario.yaml" in str(raised.value)
     assert "\n" not in str(raised.value).strip()
 
@@ -48,3 +49,8 @@ def test_duration_keys_must_be_positive():
     scenario = mut.MappingScenario(duration_factor=math.nan)
     with pytest.raises(ConfigError, match="duration_factor"):
         mut.check_mapping_scenario(scenario)
+
+
+def load(schema, check, filename):
+    """The scenario file, as the app's recipe loads it (``load_checked``)."""
+    return load_checked(schema, filename, check, what="scenario file")

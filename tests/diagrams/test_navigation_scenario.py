@@ -1,6 +1,7 @@
 import pytest
 
 import diagrams.navigation_scenario as mut
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.systems.estimation.amcl import default_amcl_config_file, load_amcl_config
 from drake_sim.worlds.arena import BoxSpec, load_arena
@@ -8,7 +9,9 @@ from tests import navigation_helpers as nh
 
 
 def test_the_shipped_scenario_loads_with_the_tuned_amcl():
-    scenario = mut.load_navigation_scenario(mut.default_scenario_file())
+    scenario = load(
+        mut.NavigationScenario, mut.check_navigation_scenario, mut.default_scenario_file()
+    )
     assert mut.config_path(scenario.arena).is_file()
     assert scenario.amcl == load_amcl_config(default_amcl_config_file())
     assert scenario.extra_obstacles == []
@@ -30,7 +33,7 @@ def test_bad_values_name_the_file_and_key(tmp_path, text, needle):
     path = tmp_path / "scenario.yaml"
     path.write_text(text)
     with pytest.raises(ConfigError, match=needle):
-        mut.load_navigation_scenario(path)
+        load(mut.NavigationScenario, mut.check_navigation_scenario, path)
 
 
 def test_extra_obstacles_join_the_world_and_are_checked():
@@ -46,3 +49,8 @@ def test_extra_obstacles_join_the_world_and_are_checked():
     scenario.extra_obstacles[0].box.position = [9.0, 0.0]
     with pytest.raises(ConfigError, match="extra_obstacles"):
         mut.world_arena(scenario, arena)
+
+
+def load(schema, check, filename):
+    """The scenario file, as the app's recipe loads it (``load_checked``)."""
+    return load_checked(schema, filename, check, what="scenario file")

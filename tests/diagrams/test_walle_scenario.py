@@ -3,12 +3,13 @@
 import pytest
 
 import diagrams.walle_scenario as mut
+from drake_sim.base.config import load_checked
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 
 
 def test_shipped_file_loads_and_says_what_the_defaults_say():
-    dut = mut.load_walle_scenario(mut.default_scenario_file())
+    dut = load(mut.WalleScenario, mut.check_walle_scenario, mut.default_scenario_file())
     defaults = mut.WalleScenario()
     assert dut.mode == "both" and dut.controller == "lqr"
     assert dut.camera == defaults.camera
@@ -29,7 +30,7 @@ def test_nested_robot_scenario_and_absolute_course(tmp_path):
         "walle: {pushes: [{time: 1.0, force: [2.0, 0.0, 0.0]}], random_seed: 7}\n"
         "line_follower: {speed: 0.2}\n"
     )
-    dut = mut.load_walle_scenario(path)
+    dut = load(mut.WalleScenario, mut.check_walle_scenario, path)
     assert dut.mode == "follow" and dut.controller == "pid"
     assert dut.walle.pushes[0].force == [2.0, 0.0, 0.0] and dut.walle.random_seed == 7
     assert dut.line_follower.speed == 0.2
@@ -55,4 +56,9 @@ def test_bad_values_name_the_key(tmp_path, text, message):
     path = tmp_path / "bad.yaml"
     path.write_text(text)
     with pytest.raises(ConfigError, match=message.replace(".", r"\.")):
-        mut.load_walle_scenario(path)
+        load(mut.WalleScenario, mut.check_walle_scenario, path)
+
+
+def load(schema, check, filename):
+    """The scenario file, as the app's recipe loads it (``load_checked``)."""
+    return load_checked(schema, filename, check, what="scenario file")

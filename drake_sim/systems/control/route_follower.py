@@ -13,7 +13,7 @@ import math
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_sim.base.errors import ConfigError
+from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.planar import wrap_angle
 
 
@@ -34,10 +34,7 @@ class RouteFollowerConfig:
 
 def check_route_follower_config(config: RouteFollowerConfig, where: str = "route_follower"):
     """Returns ``config`` if every value is finite and positive; else raises ``ConfigError``."""
-    for field in dc.fields(config):
-        value = getattr(config, field.name)
-        if not (math.isfinite(value) and value > 0):
-            raise ConfigError(f"{where}: '{field.name}' must be finite and > 0, got {value!r}")
+    require_positive(where, fields_of(config, (f.name for f in dc.fields(config))))
     return config
 
 

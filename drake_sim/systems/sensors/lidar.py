@@ -170,14 +170,9 @@ class LaserScan:
 
     def to_dict(self) -> dict:
         """Returns the scan as JSON-friendly values (``None`` for ``inf`` ranges)."""
-        return {
-            "time": self.time,
-            "angle_min": self.angle_min,
-            "angle_increment": self.angle_increment,
-            "range_min": self.range_min,
-            "range_max": self.range_max,
-            "ranges": [float(r) if math.isfinite(r) else None for r in self.ranges],
-        }
+        values = {f.name: getattr(self, f.name) for f in dc.fields(self)}
+        values["ranges"] = [float(r) if math.isfinite(r) else None for r in self.ranges]
+        return values
 
 
 def measured_ranges(exact: np.ndarray, config: LidarConfig, rng: np.random.Generator):
@@ -286,17 +281,12 @@ def add_lidar(
     plant: MultibodyPlant,
     scene_graph: SceneGraph,
     *,
-    frame: Frame,
-    X_FL: RigidTransform | None = None,
-    config: LidarConfig | None = None,
-    ignore: Sequence[ModelInstanceIndex] = (),
-    seed: int = 0,
     name: str = "lidar",
+    **lidar,
 ) -> Lidar:
-    """Adds a ``Lidar`` called ``name`` on ``frame`` at ``X_FL`` and connects its
-    ``query_object`` input to ``scene_graph``; see ``Lidar`` for the arguments."""
-    lidar = builder.AddNamedSystem(
-        name, Lidar(plant=plant, frame=frame, X_FL=X_FL, config=config, ignore=ignore, seed=seed)
-    )
-    builder.Connect(scene_graph.get_query_output_port(), lidar.get_input_port(0))
-    return lidar
+    """Adds a ``Lidar(plant=plant, **lidar)`` called ``name`` (``frame``, ``X_FL``, ``config``,
+    ``ignore``, ``seed``: see ``Lidar``) and connects its ``query_object`` input to
+    ``scene_graph``."""
+    system = builder.AddNamedSystem(name, Lidar(plant=plant, **lidar))
+    builder.Connect(scene_graph.get_query_output_port(), system.get_input_port(0))
+    return system
