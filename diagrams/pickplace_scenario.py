@@ -112,6 +112,7 @@ def load_pickplace_scenario(
         scene_path = path.parent / scenario.scene_file
         scenario.scene = load_typed(SceneFile, filename=scene_path)
     for item in overrides:
+        item = item[1] if isinstance(item, tuple) else item  # (label, KEY=VALUE) from a flag
         key = item.partition("=")[0]
         if key in _FILLED or any(key.startswith((k + ".", k + "[")) for k in _FILLED):
             raise ConfigError(f"--set {item!r}: {key} is set by {_filled_by(key)}")

@@ -216,15 +216,18 @@ def apply_overrides(schema, value, overrides, where: str = "--set"):
 
     A key may index lists (``scene.object.position[0]=0.55``, ``m[1][0]=2``,
     ``pushes[0].time=1.5``): that item alone is set and the rest of the list is kept; a mapping
-    given for an item that is a section keeps the item's other keys, as for any section.
+    given for an item that is a section keeps the item's other keys, as for any section. An
+    override may be a ``(label, "KEY=VALUE")`` pair: its errors then name ``label`` (the option
+    that set it, e.g. ``--lidar nonsense``) instead of ``where`` and the text.
 
     Raises:
         ConfigError: for a malformed override, an unknown key, an index on a value that is not
             a list or past its end, or a bad value; naming the override.
     """
     for item in overrides:
+        label, item = item if isinstance(item, tuple) else (None, item)
         key, sep, text = item.partition("=")
-        at = f"{where} {item!r}"
+        at = label or f"{where} {item!r}"
         if not sep or not key.strip():
             raise ConfigError(f"{at}: expected KEY=VALUE")
         steps = parse_key_path(key, at)

@@ -81,11 +81,13 @@ class Flag:
         """The attribute of the parsed arguments."""
         return self.name.lstrip("-").replace("-", "_")
 
-    def override(self, value) -> str:
-        """The ``KEY=VALUE`` string for ``value`` (JSON, which YAML reads: a string stays one)."""
+    def override(self, value) -> tuple[str, str]:
+        """``(label, KEY=VALUE)`` for ``value`` (JSON, which YAML reads: a string stays one); an
+        error in it names the flag and its value."""
+        label = f"{self.name} {value}"
         if isinstance(value, Path):
             value = str(value.absolute())
-        return f"{self.key}={json.dumps(value)}"
+        return label, f"{self.key}={json.dumps(value)}"
 
 
 def file_flag(name: str, what: str, help_text: str, *, required=False, **flag) -> "Flag":
@@ -188,7 +190,7 @@ def split_overrides(overrides: Sequence[str]) -> tuple[list[str], list[str]]:
     prefix) and the scenario's."""
     robot, scenario = [], []
     for item in overrides:
-        if item.startswith("robot."):
+        if isinstance(item, str) and item.startswith("robot."):
             robot.append(item[len("robot.") :])
         else:
             scenario.append(item)

@@ -155,8 +155,8 @@ def test_overrides_are_set_first_then_the_flags(tmp_path, monkeypatch):
     assert mut.overrides_from_args(toy, args) == [
         "mode=walk",
         "robot.mass=3",
-        'mode="run"',
-        f'route="{tmp_path / "r.yaml"}"',
+        ("--mode run", 'mode="run"'),
+        ("--route r.yaml", f'route="{tmp_path / "r.yaml"}"'),
     ]
     inputs = mut.load_from_args(toy, args)
     assert inputs.scenario.mode == "run" and inputs.robot.mass == 3.0  # the flag wins

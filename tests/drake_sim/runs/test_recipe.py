@@ -147,9 +147,10 @@ def test_a_loader_of_its_own_gets_the_overrides_and_the_loader_keywords(app, tmp
 def test_flag_override_and_dest():
     flag = mut.Flag("--route-file", "route")
     assert flag.dest == "route_file"
-    assert mut.Flag("--mode", "mode").override("both") == 'mode="both"'
-    assert mut.Flag("--n", "n").override(3) == "n=3"
-    relative = flag.override(Path("routes/room.yaml"))
+    assert mut.Flag("--mode", "mode").override("both") == ("--mode both", 'mode="both"')
+    assert mut.Flag("--n", "n").override(3) == ("--n 3", "n=3")
+    label, relative = flag.override(Path("routes/room.yaml"))
+    assert label == "--route-file routes/room.yaml"
     assert relative == f'route="{Path("routes/room.yaml").absolute()}"'
     assert Path(relative.split("=", 1)[1].strip('"')).is_absolute()
 
