@@ -17,6 +17,9 @@ MotionPlanRequest with a start state and one joint-space goal). The sets are thi
 Archives are unpacked beside their destination and renamed into place, so neither processes
 running at the same time nor a run stopped half-way ever see a half-unpacked set. A set that
 cannot be had raises ``MbmDataError``, one line naming what failed.
+
+The same source distribution holds the robots' descriptions: ``planning.model.vamp_resources``
+takes them from it (``planning.model.vamp_sdist.download_sdist``).
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
-import subprocess
 import sys
 import tarfile
 import tempfile
@@ -38,6 +40,7 @@ import yaml
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
 from planning.model.panda import ARM_JOINTS, FINGER_JOINTS
+from planning.model.vamp_sdist import VAMP_PACKAGE, VAMP_VERSION, download_sdist
 
 FAMILIES = (
     "table_pick_panda",
@@ -53,9 +56,6 @@ FAMILIES = (
 ENV_VAR = "DRAKE_SIM_MBM"
 """The environment variable that names a problems folder or ``problems.tar.bz2``."""
 
-VAMP_PACKAGE = "vamp-planner"
-VAMP_VERSION = "0.6.4"
-"""The release of ``vamp-planner`` whose source distribution the sets are taken from."""
 
 ARCHIVE_SHA256 = {
     "panda": "4e1509e99c53da769ee6a338cf1173ecf601e4ec16f24081d3894ef358243b69",
@@ -188,7 +188,7 @@ def download(robot: str = "panda") -> Path:
         flush=True,
     )
     with tempfile.TemporaryDirectory(prefix="drake_sim-vamp-") as scratch:
-        sdist = _pip_download(Path(scratch) / "sdist")
+        sdist = download_sdist(Path(scratch) / "sdist", "the MBM problems", _HINT, MbmDataError)
         archive = Path(scratch) / "problems.tar.bz2"
         _extract_archive(sdist, robot, archive)
         digest = hashlib.sha256(archive.read_bytes()).hexdigest()
@@ -242,42 +242,6 @@ def _check_robot(robot: str) -> None:
 def _is_problems_folder(folder: Path) -> bool:
     """Whether ``folder`` holds at least one family folder with scenes."""
     return folder.is_dir() and next(folder.glob("*/scene*.yaml"), None) is not None
-
-
-def _pip_download(folder: Path) -> Path:
-    """Runs ``pip download`` of the release's source distribution into ``folder``; returns the
-    downloaded file."""
-    requirement = f"{VAMP_PACKAGE}=={VAMP_VERSION}"
-    # --no-binary for this package alone: its sdist holds the sets, its wheels do not (and
-    # :all: would build the build tools from source too).
-    command = [
-        sys.executable,
-        "-m",
-        "pip",
-        "download",
-        "--no-deps",
-        "--no-binary",
-        VAMP_PACKAGE,
-        requirement,
-        "--dest",
-        str(folder),
-        "--disable-pip-version-check",
-        "--no-input",
-        "--quiet",
-    ]
-    failed = f"cannot download the MBM problems: `pip download {requirement}`"
-    try:
-        result = subprocess.run(command, capture_output=True, text=True, check=False)
-    except OSError as e:
-        raise MbmDataError(f"{failed} did not start ({e.strerror}); {_HINT}") from None
-    if result.returncode != 0:
-        lines = [line for line in (result.stderr + result.stdout).splitlines() if line.strip()]
-        why = lines[-1].strip() if lines else f"exit code {result.returncode}"
-        raise MbmDataError(f"{failed} failed ({why}); {_HINT}")
-    sdists = sorted(folder.glob("vamp_planner-*.tar.gz"))
-    if not sdists:
-        raise MbmDataError(f"{failed} gave no vamp_planner-*.tar.gz; {_HINT}")
-    return sdists[0]
 
 
 def _extract_archive(sdist: Path, robot: str, out: Path) -> None:
