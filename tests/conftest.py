@@ -20,6 +20,7 @@ _PLANS = (
     "notebooks",
     "signals",
     "sweep/",
+    "tools/test_plan_benchmark",
 )
 
 

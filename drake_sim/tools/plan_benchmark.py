@@ -4,6 +4,7 @@ Usage::
 
     python -m planning.benchmark [--dataset PATH] --limit 5 --timeout 5 --report report.json \\
         [--families box_panda cage_panda] [--compare-ompl] [--plot times.png]
+    python -m planning.benchmark --random 20 --seed 1 [--save-problems DIR] ...
 
 The MotionBenchMaker problems are third-party data, not part of the repository:
 ``planning.io.mbm.find_problems`` takes them from ``--dataset`` (a ``problems`` folder, a folder
@@ -25,8 +26,18 @@ times, checks per request; ``drake_sim.tools.plan_benchmark_profile``) and times
 ``plan_to_joints``' time parametrisation apart, after the timed interval. A progress bar
 (tqdm, when installed) runs on stderr. Paths are re-checked with Drake's checker alone
 (``planning.collision.checker.CheckerAdapter``), whatever collision model the planner used.
+``--random N --seed S`` plans N random problems instead
+(``planning.task.random_problems``: 3 to 8 boxes and cylinders within the arm's reach and clear
+of its base, a collision-free start and goal at least 1 rad apart with the straight line between
+them blocked; deterministic for a seed, problem k the same whatever N); a problem that cannot be
+made is a row with ``valid`` false and its ``error``. ``--save-problems DIR`` writes them as
+``DIR/random/sceneNNNN.yaml`` (moveit_msgs/PlanningScene) and ``requestNNNN.yaml``
+(MotionPlanRequest: the start's joints by name, one goal of joint constraints;
+``planning.io.problem_files``), the layout of an MBM set: ``--dataset DIR`` runs them again.
+Every row also has ``joint_names``, the planning group's joints in the order of ``path``.
 Exit code 0 when the run completed, 2 on bad input or when the problems cannot be had (one line
-on stderr: a path that is no set, a corrupt archive, a download that failed).
+on stderr: a path that is no set, a corrupt archive, a download that failed, ``--random``
+with ``--dataset``, a folder that cannot be written).
 """
 
 from __future__ import annotations
@@ -35,6 +46,7 @@ import argparse
 import contextlib
 import json
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -47,13 +59,16 @@ from drake_sim.tools.plan_benchmark_profile import PhaseProfiler, breakdown
 from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import PlanningError
-from planning.io import mbm
+from planning.io import mbm, problem_files
 from planning.model.layout import ARM_Q, FINGER_Q
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
 from planning.paths import path_length
 from planning.planning_scene import PlanningScene
+from planning.task.random_problems import PANDA_WORKSPACE, group_joint_names, random_problems
 
 _FINE = 0.01  # rad
+RANDOM_FAMILY = "random"
+"""The family folder of random problems (``--random``, ``--save-problems``)."""
 
 
 def _load(scene, problem):
@@ -191,8 +206,30 @@ def _parse_args(argv):
         help="MBM problems folder, folder with problems.tar.bz2, or the archive (default: "
         f"${mbm.ENV_VAR}, else the cache, else downloaded once with pip into the cache)",
     )
-    parser.add_argument("--families", nargs="+", choices=mbm.FAMILIES, default=list(mbm.FAMILIES))
+    parser.add_argument(
+        "--families",
+        nargs="+",
+        choices=[*mbm.FAMILIES, RANDOM_FAMILY],
+        help="families to run (default: the MBM ones; a folder of saved random problems: "
+        f"{RANDOM_FAMILY})",
+    )
     parser.add_argument("--limit", type=cli.positive_int, help="first N problems per family")
+    parser.add_argument(
+        "--random",
+        type=cli.positive_int,
+        metavar="N",
+        help="make N random problems (obstacles around the arm) instead of loading MBM sets",
+    )
+    parser.add_argument(
+        "--seed", type=cli.non_negative_int, default=0, help="seed of --random (default 0)"
+    )
+    parser.add_argument(
+        "--save-problems",
+        type=cli.output_dir("problems folder"),
+        metavar="DIR",
+        help=f"write the random problems into DIR/{RANDOM_FAMILY}/ (sceneNNNN.yaml, "
+        "requestNNNN.yaml; --dataset DIR runs them again)",
+    )
     parser.add_argument("--timeout", type=cli.positive_float, default=5.0, help="s per problem")
     parser.add_argument(
         "--report", type=cli.output_file("report"), help="JSON report, one row each"
@@ -215,14 +252,77 @@ def _parse_args(argv):
     if args.compare_ompl and not ompl_available():
         raise ConfigError("--compare-ompl needs the ompl package (pip install ompl)")
     try:
-        args.dataset = mbm.find_problems(args.dataset)
         args.options = load_planner_options(args.options) if args.options else None
     except (FileNotFoundError, RuntimeError, ValueError) as e:
         raise ConfigError(str(e).splitlines()[0]) from None
+    if args.random is not None:
+        _check_random_args(args)
+        return args
+    if args.save_problems is not None:
+        raise ConfigError("--save-problems saves the problems of --random: give --random N")
+    try:
+        args.dataset = mbm.find_problems(args.dataset)
+    except (FileNotFoundError, RuntimeError, ValueError) as e:
+        raise ConfigError(str(e).splitlines()[0]) from None
+    if args.families is None:  # a folder of saved random problems runs as it is
+        saved = (args.dataset / RANDOM_FAMILY).is_dir()
+        mbm_sets = any((args.dataset / f).is_dir() for f in mbm.FAMILIES)
+        args.families = [RANDOM_FAMILY] if saved and not mbm_sets else list(mbm.FAMILIES)
     missing = [f for f in args.families if not (args.dataset / f).is_dir()]
     if missing:
         raise ConfigError(f"{args.dataset}: no MBM family {', '.join(missing)}")
     return args
+
+
+def _check_random_args(args) -> None:
+    """--random makes its own problems: the options that choose MBM problems do not go with
+    it, and a folder to save into must not hold problems already."""
+    given = [
+        name
+        for name, value in (
+            ("--dataset", args.dataset),
+            ("--families", args.families),
+            ("--limit", args.limit),
+        )
+        if value is not None
+    ]
+    if given:
+        raise ConfigError(f"--random makes its own problems: {given[0]} does not go with it")
+    if args.save_problems is not None:
+        folder = args.save_problems / RANDOM_FAMILY
+        if next(folder.glob("*.yaml"), None) is not None:
+            raise ConfigError(f"{folder} holds problems already: give a new or empty folder")
+    args.families = [RANDOM_FAMILY]
+
+
+def make_random_problems(scene, count: int, seed: int, folder: Path) -> list:
+    """Draws ``count`` random problems for the scene's robot and writes them into
+    ``folder/random/`` (``planning.io.problem_files``); returns, in order, an ``MbmProblem``
+    for each problem made and the ``ProblemGenerationError`` of each that could not be."""
+    result = []
+    workspace = PANDA_WORKSPACE  # the robot's part: its scene, and where it reaches
+    for problem in random_problems(scene, count, seed, workspace):
+        if isinstance(problem, Exception):
+            result.append(problem)
+            continue
+        start = dict(zip(problem.joint_names, problem.q_start, strict=True))
+        goal = dict(zip(problem.joint_names, problem.q_goal, strict=True))
+        scene_file, request_file = problem_files.write_problem(
+            folder,
+            RANDOM_FAMILY,
+            problem.number,
+            problem_files.scene_message(problem.objects, f"random{problem.number:04d}"),
+            problem_files.request_message(workspace.group, start | problem.other_joints, goal),
+        )
+        result.append(mbm.MbmProblem(RANDOM_FAMILY, problem.number, scene_file, request_file))
+    return result
+
+
+def _unmade_row(error) -> dict:
+    row = {"family": RANDOM_FAMILY, "problem": error.number, "valid": False, "success": False}
+    row.update(time_s=None, path_length=None, path_valid_fine=None, path=None)
+    row["error"] = str(error)
+    return row
 
 
 def main(argv=None) -> int:
@@ -243,26 +343,18 @@ def _main(argv) -> int:
     planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planning.benchmark"))
     scene = PlanningScene()
     planner = MotionPlanner(scene, options)
-    rows = []
-    problems = list(mbm.iter_problems(folder, args.families, args.limit))
-    bar = _progress(len(problems) * (2 if args.compare_ompl else 1))
-    profiler = PhaseProfiler() if args.profile else None
-    with profiler or contextlib.nullcontext():  # wraps the planner's steps while profiling
-        for problem in problems:
-            rows.append(run_problem(scene, planner, problem, args.timeout, profiler))
-            row = rows[-1]
-            bar.write(
-                f"{row['family']} {row['problem']:4d} valid={row['valid']} "
-                f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}"
+    joint_names = list(group_joint_names(scene))
+    with contextlib.ExitStack() as stack:
+        if args.random is None:
+            problems = list(mbm.iter_problems(folder, args.families, args.limit))
+        else:
+            folder = args.save_problems or Path(
+                stack.enter_context(tempfile.TemporaryDirectory(prefix="plan_benchmark-"))
             )
-            bar.update()
-    if args.compare_ompl:
-        # After all of ours: running OMPL in between was measured to slow our planner 2-3x.
-        for problem, row in zip(problems, rows, strict=True):
-            if row["valid"]:
-                run_ompl(scene, problem, row, args.timeout)
-            bar.update()
-    bar.close()
+            problems = make_random_problems(scene, args.random, args.seed, folder)
+        rows, profiler = _run(args, scene, planner, problems)
+    for row in rows:
+        row["joint_names"] = joint_names
     print(summarize(rows))
     if profiler is not None:
         print("\n" + breakdown(profiler.requests))
@@ -272,6 +364,37 @@ def _main(argv) -> int:
         args.plot.parent.mkdir(parents=True, exist_ok=True)
         plot_times(rows, args.plot)
     return 0
+
+
+def _run(args, scene, planner, problems: list):
+    """Plans the problems (an exception in the list: a random problem that could not be
+    made), then OMPL's with ``--compare-ompl``; returns the rows and the profiler (or None)."""
+    made = [p for p in problems if not isinstance(p, Exception)]
+    bar = _progress(len(problems) + (len(made) if args.compare_ompl else 0))
+    profiler = PhaseProfiler() if args.profile else None
+    rows = []
+    with profiler or contextlib.nullcontext():  # wraps the planner's steps while profiling
+        for problem in problems:
+            if isinstance(problem, Exception):
+                rows.append(_unmade_row(problem))
+            else:
+                rows.append(run_problem(scene, planner, problem, args.timeout, profiler))
+            row = rows[-1]
+            bar.write(
+                f"{row['family']} {row['problem']:4d} valid={row['valid']} "
+                f"success={row['success']} t={row['time_s'] or 0:.3f}s {row.get('error', '')}"
+            )
+            bar.update()
+    if args.compare_ompl:
+        # After all of ours: running OMPL in between was measured to slow our planner 2-3x.
+        for problem, row in zip(problems, rows, strict=True):
+            if isinstance(problem, Exception):
+                continue
+            if row["valid"]:
+                run_ompl(scene, problem, row, args.timeout)
+            bar.update()
+    bar.close()
+    return rows, profiler
 
 
 class _PlainProgress:
@@ -330,7 +453,9 @@ def plot_times(rows: list[dict], filename: Path) -> None:
     ax.set_xscale("log")
     ax.set_xlabel("time per problem, s (log scale)")
     ax.set_ylabel("problems")
-    ax.set_title("MotionBenchMaker Panda problems")
+    families = sorted({r.get("family", "") for r in rows})
+    random = families == ["random"]
+    ax.set_title("random Panda problems" if random else "MotionBenchMaker Panda problems")
     ax.legend()
     fig.tight_layout()
     fig.savefig(filename, dpi=120)

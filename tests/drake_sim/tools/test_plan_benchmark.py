@@ -1,5 +1,5 @@
 """python -m planning.benchmark: one MBM problem end to end, the report rows, where the problems
-come from (pip mocked), bad input."""
+come from (pip mocked), random problems saved and run again, bad input."""
 
 import hashlib
 import json
@@ -11,7 +11,10 @@ import pytest
 import drake_sim.tools.plan_benchmark as mut
 from planning import PlanningScene
 from planning.io import mbm
+from tests.cli_helpers import assert_bad_input, run_module
 from tests.mbm_helpers import FakePip, make_problems_archive, make_sdist
+
+MODULE = "drake_sim.tools.plan_benchmark"
 
 
 @pytest.fixture
@@ -202,3 +205,79 @@ def test_profile_prints_the_breakdown(capsys, mbm_folder):
     assert "compiled_rrt.plan" in out and "compiled configurations" in out
     # The wrappers are gone afterwards.
     assert mut.MotionPlanner.plan_path.__module__ == "planning.motion_planner"
+
+
+def test_random_problems_end_to_end_then_again_from_the_saved_folder(tmp_path):
+    saved, report = tmp_path / "saved", tmp_path / "report.json"
+    args = ["--random", 2, "--seed", 5, "--timeout", 2, "--report", report]
+    result = run_module(MODULE, *args, "--save-problems", saved)
+    assert result.returncode == 0, result.stderr
+    assert "random" in result.stdout
+    rows = json.loads(report.read_text())
+    assert [(r["family"], r["problem"]) for r in rows] == [("random", 1), ("random", 2)]
+    assert sorted(p.name for p in (saved / "random").iterdir()) == [
+        "request0001.yaml",
+        "request0002.yaml",
+        "scene0001.yaml",
+        "scene0002.yaml",
+    ]
+    for row in rows:
+        assert row["joint_names"] == [f"panda_joint{i}" for i in range(1, 8)]
+        assert row["valid"] and row["success"] and row["path_valid_fine"], row
+        request = mbm.load_request(saved / "random" / f"request{row['problem']:04d}.yaml")
+        path = np.asarray(row["path"])
+        np.testing.assert_allclose(path[0], request.q_start[:7])
+        np.testing.assert_allclose(path[-1], request.q_goal[:7])
+    # The saved folder is a problem set: --dataset runs the same problems (random family).
+    again = tmp_path / "again.json"
+    result = run_module(MODULE, "--dataset", saved, "--timeout", 2, "--report", again)
+    assert result.returncode == 0, result.stderr
+    rows_again = json.loads(again.read_text())
+    assert [(r["family"], r["problem"], r["valid"]) for r in rows_again] == [
+        (r["family"], r["problem"], r["valid"]) for r in rows
+    ]
+    for a, b in zip(rows, rows_again, strict=True):
+        np.testing.assert_allclose(a["path"][0], b["path"][0])
+        np.testing.assert_allclose(a["path"][-1], b["path"][-1])
+    # Without --save-problems nothing is left behind, and the same seed gives the same problems.
+    third = tmp_path / "third.json"
+    assert run_module(MODULE, *args[:-1], third).returncode == 0
+    for a, b in zip(rows, json.loads(third.read_text()), strict=True):
+        np.testing.assert_array_equal(a["path"][0], b["path"][0])
+        np.testing.assert_array_equal(a["path"][-1], b["path"][-1])
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--random", "0"], "--random: must be >= 1"),
+        (["--random", "2", "--dataset", "."], "--dataset does not go with it"),
+        (["--random", "2", "--families", "box_panda"], "--families does not go with it"),
+        (["--save-problems", "{tmp}/out"], "give --random N"),
+        (["--random", "2", "--save-problems", "{tmp}/file"], "is not a directory"),
+        (["--random", "2", "--save-problems", "{tmp}/full"], "holds problems already"),
+    ],
+)
+def test_random_bad_input_exits_2_with_one_line(tmp_path, args, needle):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "full" / "random").mkdir(parents=True)
+    (tmp_path / "full" / "random" / "scene0001.yaml").write_text("name: x\n")
+    args = [a.format(tmp=tmp_path) for a in args]
+    assert_bad_input(run_module(MODULE, *args), needle)
+
+
+def test_a_random_problem_that_cannot_be_made_is_a_row_saying_so(tmp_path, monkeypatch):
+    from planning.task import random_problems
+
+    def draws(scene, count, seed, workspace):
+        yield random_problems.ProblemGenerationError(1, "random problem 1: no start and goal")
+
+    monkeypatch.setattr(mut, "random_problems", draws)
+    report = tmp_path / "report.json"
+    out = tmp_path / "out"
+    result = run_module(MODULE, "--random", 1, "--save-problems", out, "--report", report)
+    assert result.returncode == 0, result.stderr
+    (row,) = json.loads(report.read_text())
+    assert row["family"] == "random" and row["problem"] == 1
+    assert not row["valid"] and not row["success"] and "no start and goal" in row["error"]
+    assert not (out / "random").exists()
