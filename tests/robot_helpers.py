@@ -2,7 +2,8 @@
 description may take, and VAMP's four robots from wherever they can be had.
 
 VAMP's descriptions are third-party files, not in the repository: the tests take the unpacked
-copy of the ``vamp-planner`` sdist in ``DEV_RESOURCES`` when it is there, else
+copy of the ``vamp-planner`` sdist that pip leaves in the temporary folder (``dev_resources``)
+when there is one, else
 ``planning.model.vamp_resources`` downloads the sdist with pip into the session's cache; a test
 that cannot have them skips and says why. Call these from fixtures or tests, never at import
 time (the session's cache folder is set by a fixture).
@@ -10,18 +11,22 @@ time (the session's cache folder is set by a fixture).
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import pytest
 import trimesh
 
-from planning.io.mbm import MbmDataError
+from drake_sim.base.errors import ConfigError
 from planning.model.vamp_resources import vamp_resources
 
-DEV_RESOURCES = Path(
-    "/tmp/pip-download-9kntx28y/vamp-planner_dc22e2fd3cd34dcba3a764b762a6d1a8/resources"
-)
-"""An unpacked copy of vamp-planner 0.6.4's ``resources/`` on the development machine."""
+
+def dev_resources() -> Path | None:
+    """An unpacked copy of the vamp-planner sdist's ``resources/`` that ``pip download`` left
+    in the temporary folder (``pip-download-*/vamp-planner_*``), or None."""
+    found = sorted(Path(tempfile.gettempdir()).glob("pip-download-*/vamp-planner_*/resources"))
+    return next((folder for folder in found if folder.is_dir()), None)
+
 
 MOVEIT_SRDF = Path(__file__).resolve().parents[2] / "shared" / "real_ros" / "moveit" / "srdf"
 """MoveIt's Panda SRDF xacros (``shared/real_ros/moveit/srdf``, beside the checkout)."""
@@ -31,13 +36,13 @@ _FOUND: dict = {}
 
 def vamp_robot(robot: str) -> Path:
     """Returns VAMP's ``resources/<robot>`` in the cache (``package://vamp_resources/<robot>``),
-    from ``DEV_RESOURCES`` or a download; skips the test, saying why, when neither works (a
+    from ``dev_resources()`` or a download; skips the test, saying why, when neither works (a
     failure is remembered: one try per session)."""
-    if isinstance(_FOUND.get("error"), MbmDataError):
+    if isinstance(_FOUND.get("error"), ConfigError):
         pytest.skip(f"VAMP robot descriptions not available: {_FOUND['error']}")
     try:
-        return vamp_resources(robot, DEV_RESOURCES if DEV_RESOURCES.is_dir() else None)
-    except MbmDataError as e:
+        return vamp_resources(robot, dev_resources())
+    except ConfigError as e:
         _FOUND["error"] = e
         pytest.skip(f"VAMP robot descriptions not available: {e}")
 

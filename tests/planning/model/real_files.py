@@ -8,10 +8,11 @@
 """
 
 import importlib.metadata
-import tempfile
 from pathlib import Path
 
 import pytest
+
+from tests.robot_helpers import dev_resources
 
 ROOT = Path(__file__).resolve().parents[3]
 MOVEIT_SRDF = ROOT.parent / "shared" / "real_ros" / "moveit" / "srdf"
@@ -34,8 +35,8 @@ def vamp_robot_dir(robot: str) -> Path:
         candidates.append(resources_root() / robot)
     except ImportError:
         pass
-    for sdist in sorted(Path(tempfile.gettempdir()).glob("pip-download-*/vamp-planner_*")):
-        candidates.append(sdist / "resources" / robot)
+    if dev_resources() is not None:
+        candidates.append(dev_resources() / robot)
     for folder in candidates:
         if (folder / f"{robot}.urdf").is_file() and (folder / f"{robot}.srdf").is_file():
             return folder

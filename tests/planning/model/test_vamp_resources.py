@@ -13,7 +13,7 @@ from drake_sim.base.errors import ConfigError
 from planning.model import vamp_sdist as mbm
 from planning.model.robot_files import resolve_uri
 from tests.mbm_helpers import FakePip
-from tests.robot_helpers import DEV_RESOURCES
+from tests.robot_helpers import dev_resources
 
 ROBOTS = ("panda", "ur5", "fetch", "baxter")
 
@@ -125,7 +125,7 @@ def test_bad_sources_and_robots(cache, tmp_path):
         mut.vamp_resources("ur5", tmp_path / "empty")
 
 
-@pytest.mark.skipif(not DEV_RESOURCES.is_dir(), reason=f"no unpacked vamp sdist at {DEV_RESOURCES}")
+@pytest.mark.skipif(dev_resources() is None, reason="no unpacked vamp sdist left by pip download")
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_the_release_matches_the_pins(robot):
-    assert mut.tree_digest(DEV_RESOURCES / robot) == mut.RESOURCES_SHA256[robot]
+    assert mut.tree_digest(dev_resources() / robot) == mut.RESOURCES_SHA256[robot]
