@@ -13,7 +13,6 @@ import numpy as np
 
 from diagrams.flip import make_flip_diagram
 from diagrams.flip_scenario import FlipScenario, check_flip_scenario, load_flip_scenario
-from drake_sim.base import cli
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.base.resources import config_dir
 from drake_sim.robots.ddrive import default_robot_file
@@ -97,7 +96,8 @@ def summarize(
 
 
 class FlipRun(SimulationRun):
-    """The flipping robot's diagram and simulator, ready to advance.
+    """The flipping robot's diagram and simulator, ready to advance (a bar on headless runs of
+    ``PROGRESS_MIN_DURATION`` s or more, on a terminal only).
 
     Args:
         scenario: world, sensors and controllers; its ``scene.random_seed`` seeds the IMU noise.
@@ -108,6 +108,8 @@ class FlipRun(SimulationRun):
             and ``controller``: "flip" (the default), "teleop" (Meshcat keys; needs
             ``meshcat``) or "cmd_vel" (fix or connect the diagram's ``cmd_vel`` input).
     """
+
+    progress_from = PROGRESS_MIN_DURATION
 
     def __init__(self, scenario: FlipScenario, robot: RobotParams, *, realtime=None, **diagram):
         self.scenario = scenario
@@ -120,11 +122,6 @@ class FlipRun(SimulationRun):
     def default_duration(self, *, viewer: bool = False) -> float:
         """Until Ctrl-C with a viewer, else ``HEADLESS_DURATION``."""
         return math.inf if viewer else HEADLESS_DURATION
-
-    def drive(self, duration: float, *, meshcat=None, headless: bool = True) -> None:
-        """Runs until ``duration``; a bar on long headless runs, on a terminal only."""
-        cli.announce(meshcat, self.doing)
-        self.run(duration, progress=headless and duration >= PROGRESS_MIN_DURATION)
 
     def set_up_viewer(self, meshcat) -> None:
         """Points Meshcat's camera at the robot and hides the grid (the street is the floor)."""

@@ -34,6 +34,7 @@ class SimulationRun:
     check_period: float | None = None
     failed_end = "failed"
     doing = "running"  # What the announcement says the run is doing.
+    progress_from = 0.0  # s: a CLI's headless run this long or longer shows a progress bar.
 
     def __init__(self, diagram, seed: int, *, realtime=False, config=None, meshcat=None):
         """Starts the simulator of ``diagram`` with every random source drawn from ``seed``.
@@ -83,9 +84,10 @@ class SimulationRun:
 
     def drive(self, duration: float, *, meshcat=None, headless: bool = True) -> None:
         """What a CLI's run does: says it has started (at Meshcat's URL, or headless) and
-        runs until ``duration``, with a progress bar when ``headless``."""
+        runs until ``duration``, with a progress bar when ``headless`` (and the run is at least
+        ``progress_from`` long)."""
         cli.announce(meshcat, self.doing)
-        self.run(duration, progress=headless)
+        self.run(duration, progress=headless and duration >= self.progress_from)
 
     def finish(self):
         """Ends a CLI's run (saving what it made) and returns its report."""
