@@ -53,10 +53,10 @@ from planning.model.panda import (
     ARM_JOINTS,
     FINGER_JOINTS,
     add_panda,
-    apply_disabled_collisions,
     disabled_collision_pairs,
 )
 from planning.model.panda_config import PandaModelConfig
+from planning.model.planning_model import apply_disabled_collisions
 from planning.scene_objects import FREE_BODY_POSITIONS, free_body_positions
 
 PANDA = "panda"

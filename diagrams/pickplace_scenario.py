@@ -33,7 +33,7 @@ from drake_sim.base.resources import config_dir
 from planning.config import PandaPlanningConfig, check_panda_config
 from planning.execution.options import InterfaceOptions
 from planning.io.scene_files import SceneFile
-from planning.model.layout import NUM_FINGERS
+from planning.model.planning_model import finger_defaults, named_configurations
 from planning.motion_planner import MotionPlannerOptions
 from planning.task.options import PickPlaceOptions
 
@@ -73,16 +73,20 @@ class PickPlaceScenario:
         """The station's config with the robot model, the scene and the start filled in."""
         if self.scene is None:
             raise ConfigError("scenario: no scene (load it with load_pickplace_scenario)")
-        q_arm = self.robot.model.named_configurations.get(self.initial_configuration)
+        named = named_configurations(self.robot.model)
+        q_arm = named.get(self.initial_configuration)
         if q_arm is None:
-            known = ", ".join(sorted(self.robot.model.named_configurations))
+            known = ", ".join(sorted(named))
             raise ConfigError(
                 f"scenario: initial_configuration {self.initial_configuration!r} is not a named "
                 f"configuration of robot.model (known: {known})"
             )
-        fingers = [self.robot.model.finger_position] * NUM_FINGERS
+        fingers = finger_defaults(self.robot.model)
         return dc.replace(
-            self.station, model=self.robot.model, scene=self.scene, initial_q=[*q_arm, *fingers]
+            self.station,
+            model=self.robot.model,
+            scene=self.scene,
+            initial_q=[*map(float, q_arm), *fingers],
         )
 
 

@@ -15,8 +15,8 @@ from pathlib import Path
 
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
-from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, NUM_ARM_JOINTS
 from planning.model.panda_config import PandaModelConfig, TableConfig
+from planning.model.planning_model import finger_defaults, named_configurations
 
 
 @dc.dataclass
@@ -65,23 +65,21 @@ def load_panda_config(
 
 
 def check_panda_config(config: PandaPlanningConfig, where: str = "robot") -> None:
-    """Raises ConfigError for values the planning model cannot use."""
+    """Raises ConfigError for values the planning model cannot use (the robot's files are read
+    to check the named configurations' sizes and the finger position against its joints)."""
     model = config.model
-    for name, q in model.named_configurations.items():
-        if len(q) != NUM_ARM_JOINTS:
-            raise ConfigError(
-                f"{where}: model.named_configurations.{name} has {len(q)} values, "
-                f"expected {NUM_ARM_JOINTS}"
-            )
+    try:
+        named_configurations(model)
+        finger_defaults(model)
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}") from None
     for pair in model.extra_disabled_collisions:
         if len(pair) != 2:
             raise ConfigError(
                 f"{where}: model.extra_disabled_collisions entry {pair} is not a pair"
             )
-    if not FINGER_CLOSED <= model.finger_position <= FINGER_OPEN:
-        raise ConfigError(
-            f"{where}: model.finger_position must be in [{FINGER_CLOSED}, {FINGER_OPEN}] m"
-        )
+    if not model.description:
+        raise ConfigError(f"{where}: model.description must name a robot (e.g. panda)")
     if model.edge_step_size <= 0.0:
         raise ConfigError(f"{where}: model.edge_step_size must be positive")
     if config.table is not None and (

@@ -29,7 +29,7 @@ from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter
 from planning.errors import ErrorCode, PlanningError
 from planning.paths import path_length
-from planning.plan import Plan, PlanResult
+from planning.plan import Plan, PlanResult, plan_robot
 from planning.planner_options import MotionPlannerOptions, load_planner_options, request_timeout
 from planning.planner_setup import kernels_now, make_search, warm_up_timing
 from planning.robot_state import RobotState
@@ -41,18 +41,21 @@ __all__ = ["MotionPlanner", "MotionPlannerOptions", "load_planner_options"]
 
 
 class MotionPlanner:
-    """Plans collision-free motions of the Panda in a ``PlanningScene``.
+    """Plans collision-free motions of a robot's planning group in a ``PlanningScene``.
 
     Args:
         scene: the planning scene (robot, objects, collision checker).
         options: planner options; ``MotionPlannerOptions()`` (the defaults) when None.
-        state: the current state requests start from; ``RobotState(scene)`` ("ready") when None.
+        state: the current state requests start from; ``RobotState(scene)`` (the model's
+            home) when None.
     """
 
     def __init__(self, scene, options: MotionPlannerOptions | None = None, *, state=None):
         self._scene = scene
-        self._options = options if options is not None else MotionPlannerOptions()
-        self._options.check()
+        options = options if options is not None else MotionPlannerOptions()
+        options.check()
+        timing = options.timing.with_robot_limits(scene.model.robot)  # empty ones: the robot's
+        self._options = dc.replace(options, timing=timing)
         self._state = state if state is not None else RobotState(scene)
         # Until the compiled search is in numba's cache, plan on Drake's checker while it is
         # built in the background (``planning.planner_setup``), then switch to it.
@@ -141,7 +144,7 @@ class MotionPlanner:
         return self._result(path, how, t0)
 
     def plan_to_named(self, name: str, *, q_start=None, timeout: float | None = None):
-        """Plans to a named configuration of ``config/panda.yaml`` or the SRDF (e.g. "ready")."""
+        """Plans to a named configuration of the robot's description or SRDF (e.g. "ready")."""
         return self.plan_to_joints(self._state.named(name), q_start=q_start, timeout=timeout)
 
     def plan_to_pose(
@@ -219,7 +222,7 @@ class MotionPlanner:
         if not np.all(np.isfinite(X_WG.GetAsMatrix4())):
             raise PlanningError(ErrorCode.INVALID_GOAL, "the Cartesian goal pose is not finite")
         plant, scene = self._scene.plant, self._scene
-        name = frame or scene.config.model.ee_frame
+        name = frame or scene.model.ee_frame
         if not plant.HasFrameNamed(name, scene.model.instance):
             raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the Panda has no frame {name!r}")
         opts = self._options
@@ -295,17 +298,25 @@ class MotionPlanner:
             raise PlanningError(code, f"the {what} collides: {self._scene.describe_collisions(q)}")
 
     def _as_arm(self, q, code: ErrorCode, what: str) -> np.ndarray:
-        """q as the 7 arm joints clamped into their limits (a copy), or raises ``code`` when it
-        is not 7 or 9 finite values or lies beyond a limit by more than 1e-6 rad. A few array
-        operations on 7 values (~4 us warm; a loop over plain floats took ~12 us)."""
+        """q as the group's joints clamped into their limits (a copy), or raises ``code`` when
+        it is not the group's or all the plant's positions, finite, or lies beyond a limit by
+        more than 1e-6 rad. A few array operations (~4 us warm; a loop over plain floats took
+        ~12 us on the Panda's 7 values)."""
         values = np.asarray(q, dtype=float).reshape(-1)
         lower, upper, low, high = self._limits
-        arm = values[:7]
-        inside = values.size in (7, 9) and ((arm >= low) & (arm <= high)).all()  # NaN: outside
-        if not (inside and (values.size == 7 or np.isfinite(values[7:]).all())):
-            if values.size not in (7, 9) or not np.isfinite(values).all():
+        n, total = self._scene.num_joints, self._scene.plant.num_positions()
+        sizes = (n, total)
+        if values.size == total and total != n:
+            arm = values[self._scene.model.group_indices]
+        else:
+            arm = values[:n]
+        inside = values.size in sizes and ((arm >= low) & (arm <= high)).all()  # NaN: outside
+        if not (inside and np.isfinite(values).all()):
+            if values.size not in sizes or not np.isfinite(values).all():
                 listed = values.tolist()
-                raise PlanningError(code, f"the {what} must be 7 or 9 finite values, got {listed}")
+                raise PlanningError(
+                    code, f"the {what} must be {n} or {total} finite values, got {listed}"
+                )
             raise PlanningError(code, f"the {what} {np.round(arm, 4).tolist()} is out of limits")
         return arm.clip(lower, upper)
 
@@ -341,6 +352,7 @@ class MotionPlanner:
             acceleration_scaling=opts.acceleration_scaling,
             finger_positions=self._scene.finger_positions,
             scene=describe_scene(self._scene),
+            robot=plan_robot(self._scene),
             info={
                 "planner": how,
                 "planning_time_s": time.perf_counter() - t0,

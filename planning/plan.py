@@ -3,13 +3,15 @@
 File format (JSON, one object; ``Plan.save`` / ``Plan.load``)::
 
     {
-      "format": "drake_sim.plan", "version": 2,
-      "robot": {"name": "panda", "joints": ["panda_joint1", ...]},
-      "waypoints": [[q1..q7], ...],            # rad, the collision-checked path
-      "max_velocity": [7 values],              # rad/s, limits after scaling
-      "max_acceleration": [7 values],          # rad/s^2, limits after scaling
+      "format": "drake_sim.plan", "version": 3,
+      "robot": {"name": "panda", "group": "arm", "joints": ["panda_joint1", ...],
+                "fingers": ["panda_finger_joint1", "panda_finger_joint2"]},
+      "waypoints": [[q1..qn], ...],            # rad (m), the group's joints, the checked path
+      "max_velocity": [n values],              # rad/s, limits after scaling
+      "max_acceleration": [n values],          # rad/s^2, limits after scaling
       "velocity_scaling": 1.0, "acceleration_scaling": 1.0,
-      "finger_positions": [f1, f2],            # m, held during the motion
+      "finger_positions": [f1, f2],            # robot.fingers (the joints below the attach
+                                               # link), held during the motion (the Panda's: m)
       "timing": {"method": "toppra", "max_corner_angle": 1.0,   # rad
                  "path_tolerance": 0.002, "margin": 0.01},      # rad, fraction
       "scene": {"world": [object, ...], "attached": [object, ...]},
@@ -19,7 +21,9 @@ File format (JSON, one object; ``Plan.save`` / ``Plan.load``)::
 where an object is ``{"name", "shape", "size", "position", "orientation": [x, y, z, w]}`` as in
 ``scene_objects`` (world objects: pose X_WO; attached ones: X_AO in the hand's attachment frame).
 ``timing`` holds ``planning.timing.retime.RetimeOptions``. Version 1 files have no ``timing``: they
-load with ``method: rest_to_rest`` (a stop at every waypoint), the timing they were saved with.
+load with ``method: rest_to_rest`` (a stop at every waypoint), the timing they were saved with;
+version 1 and 2 files have no ``robot.group`` (they are the Panda's arm). A plan records its
+robot and group and is refused by a scene of another robot or group (``Plan.check_robot``).
 Times are not stored: they follow from the waypoints, limits and timing options
 (``planning.timing.retime``), so a loaded plan samples exactly as the saved one. Floats are written
 with ``repr`` precision, so a plan loads back equal.
@@ -46,11 +50,17 @@ from drake_sim.base.files import write_atomic
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
 from planning.io.plan_files import FORMAT, VERSION, check_plan_data, invalid, read_plan_json
-from planning.model.layout import FINGER_OPEN, NUM_ARM_JOINTS, NUM_FINGERS
+from planning.model.layout import FINGER_OPEN, NUM_FINGERS
 from planning.model.panda import ARM_JOINTS
 from planning.scene_objects import describe_scene
 from planning.timing.retime import RetimeOptions, Timing
 
+PANDA_ARM = {
+    "name": "panda",
+    "group": "arm",
+    "fingers": ["panda_finger_joint1", "panda_finger_joint2"],
+}
+"""The robot of a plan made without one (the Panda's arm, as every version 1 and 2 file)."""
 _UNTIMEABLE = "the waypoints cannot be timed within the limits"
 
 
@@ -64,13 +74,14 @@ class Plan:
     ``max_acceleration``.
 
     Attributes:
-        waypoints: (N, 7) arm joints, rad; the straight-line interpolation is the checked path.
-        max_velocity: (7,) joint speed limits used, rad/s (already scaled).
-        max_acceleration: (7,) joint acceleration limits used, rad/s^2 (already scaled).
+        waypoints: (N, n) the group's joints (rad or m); the straight-line interpolation is the
+            checked path.
+        max_velocity: (n,) joint speed limits used, rad/s (already scaled).
+        max_acceleration: (n,) joint acceleration limits used, rad/s^2 (already scaled).
         velocity_scaling, acceleration_scaling: the factors applied to the robot's limits.
-        finger_positions: (2,) m, during the motion.
+        finger_positions: the fingers (joints below the attach link) during the motion.
         scene: ``describe_scene`` of the scene it was planned in.
-        robot: name and joint names.
+        robot: the robot's name, its planning group and the group's joint names (n).
         timing: how the path is timed (``planning.timing.retime.RetimeOptions``).
         info: free-form facts (planner, planning time, path length, ...).
     """
@@ -82,7 +93,7 @@ class Plan:
     acceleration_scaling: float = 1.0
     finger_positions: np.ndarray = field(default_factory=lambda: np.full(NUM_FINGERS, FINGER_OPEN))
     scene: dict = field(default_factory=lambda: {"world": [], "attached": []})
-    robot: dict = field(default_factory=lambda: {"name": "panda", "joints": list(ARM_JOINTS)})
+    robot: dict = field(default_factory=lambda: dict(PANDA_ARM, joints=list(ARM_JOINTS)))
     info: dict = field(default_factory=dict)
     timing: RetimeOptions = field(default_factory=RetimeOptions)
 
@@ -90,15 +101,17 @@ class Plan:
         self.waypoints = np.atleast_2d(np.asarray(self.waypoints, dtype=float))
         self.max_velocity = np.asarray(self.max_velocity, dtype=float)
         self.max_acceleration = np.asarray(self.max_acceleration, dtype=float)
-        self.finger_positions = np.asarray(self.finger_positions, dtype=float)
-        if self.waypoints.shape[1] != NUM_ARM_JOINTS or len(self.waypoints) < 1:
-            raise ValueError(f"waypoints must be (N, 7), got {self.waypoints.shape}")
-        sizes = {"max_velocity": NUM_ARM_JOINTS, "max_acceleration": NUM_ARM_JOINTS}
-        sizes.update(finger_positions=NUM_FINGERS, waypoints=self.waypoints.size)
+        self.finger_positions = np.asarray(self.finger_positions, dtype=float).reshape(-1)
+        self.robot = {"group": "", "fingers": PANDA_ARM["fingers"], **self.robot}
+        n = len(self.robot["joints"])
+        if self.waypoints.shape[1] != n or len(self.waypoints) < 1:
+            raise ValueError(f"waypoints must be (N, {n}), got {self.waypoints.shape}")
+        sizes = {"max_velocity": n, "max_acceleration": n}
+        sizes.update(finger_positions=len(self.robot["fingers"]), waypoints=self.waypoints.size)
         for name, size in sizes.items():
             value = getattr(self, name)
             if value.size != size or not np.all(np.isfinite(value)):
-                shown = value.tolist() if value.size <= 2 * NUM_ARM_JOINTS else value.shape
+                shown = value.tolist() if value.size <= 2 * n else value.shape
                 raise ValueError(f"{name} must be {size} finite values, got {shown}")
         if np.any(self.max_velocity <= 0) or np.any(self.max_acceleration <= 0):
             raise ValueError("velocity and acceleration limits must be positive")
@@ -134,11 +147,11 @@ class Plan:
         return float(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1).sum())
 
     def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Returns (q rad, v rad/s, a rad/s^2) of the 7 arm joints at time t (clamped)."""
+        """Returns (q rad, v rad/s, a rad/s^2) of the group's joints at time t (clamped)."""
         return self._timing.sample(float(t))
 
     def sample_many(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Returns (times (M,), q (M, 7)) every dt seconds, the end included."""
+        """Returns (times (M,), q (M, n)) every dt seconds, the end included."""
         ts = np.append(np.arange(0.0, self.duration, dt), self.duration)
         return ts, np.array([self.sample(t)[0] for t in ts])
 
@@ -146,6 +159,30 @@ class Plan:
     def scene_matches(self, scene) -> bool:
         """True when ``scene`` holds the same objects as the scene this plan was made for."""
         return _rounded(describe_scene(scene)) == _rounded(self.scene)
+
+    def check_robot(self, scene) -> None:
+        """Raises unless the plan is for the scene's robot and planning group.
+
+        Raises:
+            PlanningError: INVALID_MOTION_PLAN naming both (a plan without a group, from a
+                version 1 or 2 file, matches by robot name and joints).
+        """
+        model = scene.model
+        mine = self.robot
+        fingers = plan_robot(scene)["fingers"]
+        same = (
+            mine["name"] == model.robot.name
+            and list(mine["joints"]) == model.joint_names
+            and list(mine["fingers"]) == fingers
+        )
+        if same and (not mine.get("group") or mine["group"] == model.robot.group):
+            return
+        raise PlanningError(
+            ErrorCode.INVALID_MOTION_PLAN,
+            f"the plan is for {mine['name']} group {mine.get('group') or '?'} "
+            f"({', '.join(mine['joints'])}); the scene's robot is {model.robot.name} group "
+            f"{model.robot.group} ({', '.join(model.joint_names)})",
+        )
 
     def validate(self, scene, resolution: float = 0.01, *, finger_positions=None) -> None:
         """Re-checks the path against ``scene`` (e.g. just before execution): the straight
@@ -159,8 +196,10 @@ class Plan:
                 check before motion passes the measured ones).
 
         Raises:
-            PlanningError: INVALID_MOTION_PLAN naming the colliding bodies.
+            PlanningError: INVALID_MOTION_PLAN naming the colliding bodies, or another robot's
+                plan (``check_robot``).
         """
+        self.check_robot(scene)
         saved = scene.finger_positions
         fingers = self.finger_positions if finger_positions is None else finger_positions
         scene.finger_positions = fingers
@@ -326,6 +365,23 @@ class Plan:
                 scene.publish(q)
         finally:
             scene.finger_positions = saved
+
+
+def plan_robot(scene) -> dict:
+    """The ``robot`` entry of a plan made in ``scene``: its robot's name, group and joints."""
+    model, plant = scene.model, scene.plant
+    fingers = [
+        plant.get_joint(j).name()
+        for j in plant.GetJointIndices(model.instance)
+        if plant.get_joint(j).num_positions() == 1
+        and plant.get_joint(j).position_start() in set(model.finger_indices.tolist())
+    ]
+    return {
+        "name": model.robot.name,
+        "group": model.robot.group,
+        "joints": model.joint_names,
+        "fingers": fingers,
+    }
 
 
 def _panda_position_limits() -> tuple[np.ndarray, np.ndarray]:

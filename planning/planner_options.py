@@ -22,8 +22,6 @@ from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
 
-NUM_JOINTS = 7  # the Panda's arm joints
-
 
 def _require(ok: bool, field: str, rule: str, value) -> None:
     """Raises ValueError "<field> must be <rule>, got <value>" unless ``ok``."""
@@ -172,22 +170,21 @@ class CartesianOptions:
         _positive(self.jump_threshold, f"{prefix}.jump_threshold")
 
 
-def _panda_max_velocity() -> list[float]:
-    return [2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61]
-
-
-def _panda_max_acceleration() -> list[float]:
-    return [15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0]
+DEFAULT_ACCELERATION = 1.0
+"""rad/s^2 (or m/s^2), a joint's acceleration limit when neither its URDF nor a joint_limits.yaml
+sets one (MoveIt's time parametrisation assumes the same)."""
 
 
 @dc.dataclass
 class TimingOptions:
     """Joint limits the paths are timed within (``planning.timing.retime``), and their scaling."""
 
-    # rad/s, joints 1..7; default: the Franka Panda's limits (Franka's datasheet)
-    max_velocity: list[float] = dc.field(default_factory=_panda_max_velocity)
-    # rad/s^2, joints 1..7; default: the Franka Panda's limits (Franka's datasheet)
-    max_acceleration: list[float] = dc.field(default_factory=_panda_max_acceleration)
+    # rad/s (or m/s), one per joint of the group; empty: the robot model's (its URDF's, or its
+    # joint_limits.yaml's), filled in by MotionPlanner (``with_robot_limits``)
+    max_velocity: list[float] = dc.field(default_factory=list)
+    # rad/s^2, one per joint; empty: the robot model's (joint_limits.yaml; the Panda's: Franka's
+    # datasheet), DEFAULT_ACCELERATION where it sets none
+    max_acceleration: list[float] = dc.field(default_factory=list)
     velocity_scaling: float = 1.0  # (0, 1], applied to max_velocity
     acceleration_scaling: float = 1.0  # (0, 1], applied to max_acceleration
 
@@ -195,10 +192,34 @@ class TimingOptions:
         """Raises ValueError naming the first field out of range."""
         for name in ("max_velocity", "max_acceleration"):
             values = getattr(self, name)
-            ok = len(values) == NUM_JOINTS and all(v > 0.0 and math.isfinite(v) for v in values)
-            _require(ok, f"{prefix}.{name}", f"{NUM_JOINTS} finite values > 0", values)
+            ok = all(v > 0.0 and math.isfinite(v) for v in values)
+            _require(ok, f"{prefix}.{name}", "finite values > 0 (or none: the robot's)", values)
         _fraction(self.velocity_scaling, f"{prefix}.velocity_scaling", zero_ok=False)
         _fraction(self.acceleration_scaling, f"{prefix}.acceleration_scaling", zero_ok=False)
+
+    def with_robot_limits(self, robot, prefix: str = "timing") -> "TimingOptions":
+        """A copy with empty limits filled from the robot model (``RobotModel``: velocity,
+        acceleration; ``DEFAULT_ACCELERATION`` where it has none).
+
+        Raises:
+            ValueError: a list given here has not one value per joint of the group, or the
+                robot has no velocity limit for a joint and none is given.
+        """
+        n = robot.num_joints
+        filled = {}
+        own = {"max_velocity": robot.velocity, "max_acceleration": robot.acceleration}
+        for name, limits in own.items():
+            values = list(getattr(self, name))
+            if not values:
+                fallback = DEFAULT_ACCELERATION if name == "max_acceleration" else math.nan
+                values = [float(v) if math.isfinite(v) else fallback for v in limits]
+                names = robot.joint_names
+                missing = [j for j, v in zip(names, values, strict=True) if math.isnan(v)]
+                rule = f"given (the robot has none for {', '.join(missing)})"
+                _require(not missing, f"{prefix}.{name}", rule, values)
+            _require(len(values) == n, f"{prefix}.{name}", f"{n} values ({robot.group})", values)
+            filled[name] = values
+        return dc.replace(self, **filled)
 
 
 @dc.dataclass

@@ -1,15 +1,21 @@
-"""The planning scene: the Panda, world objects and objects held in the hand, with fast queries.
+"""The planning scene: a robot, world objects and objects it holds, with fast queries.
 
-The robot model is built once; objects are added to and removed from the model of a
+The robot model (``planning.model.planning_model``: the Panda unless the configuration names
+another description) is built once; objects are added to and removed from the model of a
 ``BatchedCollisionChecker`` (Drake's ``SceneGraphCollisionChecker``, one geometry per object,
 registered in every checker context before the next query: adding costs about the same at 400
 objects as at 10, see ``benchmarks/scene_scale_benchmark.py``), never rebuilding the plant.
-World objects hang on the world body; attached objects hang on ``panda_attachment``, a body
-welded to the hand, so they move with the hand, are checked against the world and the arm links,
-and not against the hand and fingers (filtered in the SceneGraph model, see ``panda_model``).
+World objects hang on the world body; attached objects hang on ``<robot>_attachment``, a body
+welded to the description's attach link (the Panda's hand), so they move with it, are checked
+against the world and the robot's other links, and not against the attach link and the links
+below it (filtered in the SceneGraph model, see ``planning_model``).
 
-World objects are not checked against ``panda_link0``: it is welded to the world, and Drake
-filters collisions within a welded group.
+World objects are not checked against the robot's root link: it is welded to the world, and
+Drake filters collisions within a welded group.
+
+Configurations ``q`` are the planning group's joints (``model.num_joints`` values, in the
+group's order: the Panda's 7 arm joints), with every other joint at ``other_positions``, or all
+of the plant's positions.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from planning.collision.batched_checker import BatchedCollisionChecker
 from planning.config import PandaPlanningConfig
 from planning.errors import ErrorCode, PlanningError
 from planning.io import scene_files
-from planning.model import panda
+from planning.model.planning_model import PlanningModel, build_planning_model
 from planning.scene_objects import SceneObject
 
 _WORLD_PREFIX = "world/"
@@ -33,10 +39,10 @@ _ATTACHED_PREFIX = "attached/"
 
 
 class PlanningScene:
-    """The Panda, the objects around it and the objects it holds.
+    """A robot, the objects around it and the objects it holds.
 
-    Configurations ``q`` are the 7 arm joints (rad), with the fingers at ``finger_positions``,
-    or the plant's full 9 positions (7 arm joints, then the 2 fingers in m).
+    Configurations ``q`` are the group's joints, with the other joints at ``other_positions``,
+    or all of the plant's positions (the Panda: 7 arm joints, or those and its 2 fingers).
 
     Args:
         config: the planning configuration; ``PandaPlanningConfig()`` when None. Its ``table``
@@ -46,7 +52,7 @@ class PlanningScene:
 
     def __init__(self, config: PandaPlanningConfig | None = None, *, meshcat=None):
         self._config = config if config is not None else PandaPlanningConfig()
-        model = panda.build_panda_model(self._config.model, meshcat=meshcat)
+        model = build_planning_model(self._config.model, meshcat=meshcat)
         options = self._config.model
         self._checker = BatchedCollisionChecker(
             model=model.diagram,
@@ -60,7 +66,7 @@ class PlanningScene:
         self._meshcat = meshcat
         self._world: dict[str, SceneObject] = {}
         self._attached: dict[str, SceneObject] = {}
-        self._finger_positions = np.full(2, options.finger_position)
+        self._other_positions = model.default_other.copy()
         # A context of our own to name colliding geometries and evaluate poses.
         self._context = self._checker.MakeStandaloneModelContext()
         self._geometry_names: dict[GeometryId, str] = {}  # object names of added geometries
@@ -71,7 +77,7 @@ class PlanningScene:
         self.sphere_models: dict[float, object] = {}
         # The checker filters body pairs: declare the SRDF's pairs there too, so that shapes
         # added later (held objects on the attachment body) are filtered as well.
-        for link_a, link_b in panda.disabled_collision_pairs(options):
+        for link_a, link_b in model.disabled_pairs:
             self.allow_collision(link_a, link_b)
         self._robot_filters = self._checker.GetFilteredCollisionMatrix().copy()  # the robot's own
         # Held objects may touch world objects (they rest on the table when grasped and when
@@ -92,7 +98,7 @@ class PlanningScene:
         return self._config
 
     @property
-    def model(self) -> panda.PandaModel:
+    def model(self) -> PlanningModel:
         """The robot model (its ``diagram`` is owned by the collision checker)."""
         return self._model
 
@@ -113,39 +119,92 @@ class PlanningScene:
         return self._meshcat
 
     @property
+    def num_joints(self) -> int:
+        """The size of a planning configuration: the group's joints."""
+        return self._model.num_joints
+
+    @property
+    def lower(self) -> np.ndarray:
+        """The group's lower position limits (the robot model's: URDF, soft limits, MoveIt's
+        joint_limits.yaml; -pi for a continuous joint)."""
+        return self._model.robot.lower.copy()
+
+    @property
+    def upper(self) -> np.ndarray:
+        """The group's upper position limits (pi for a continuous joint)."""
+        return self._model.robot.upper.copy()
+
+    @property
+    def other_positions(self) -> np.ndarray:
+        """The positions of the joints outside the group (``model.other_indices``), rad or m:
+        where they stay while the group moves."""
+        return self._other_positions.copy()
+
+    @other_positions.setter
+    def other_positions(self, value) -> None:
+        shape = self._other_positions.shape
+        value = np.broadcast_to(np.asarray(value, dtype=float), shape).copy()
+        if not np.all(np.isfinite(value)):
+            raise ValueError(f"joint positions must be finite, got {value}")
+        self._other_positions = value
+        self.version += 1
+
+    @property
     def finger_positions(self) -> np.ndarray:
-        """Each finger's position, m (0 closed, 0.04 open), used with 7-joint q."""
-        return self._finger_positions.copy()
+        """Each finger's position (the joints below the attach link; the Panda's: m, 0 closed,
+        0.04 open)."""
+        return self._other_positions[self._model.finger_mask].copy()
 
     @finger_positions.setter
     def finger_positions(self, value) -> None:
-        value = np.broadcast_to(np.asarray(value, dtype=float), (2,)).copy()
-        if not np.all(np.isfinite(value)):
-            raise ValueError(f"finger positions must be finite, got {value}")
-        self._finger_positions = value
-        self.version += 1
+        mask = self._model.finger_mask
+        value = np.broadcast_to(np.asarray(value, dtype=float), (int(mask.sum()),))
+        others = self._other_positions.copy()
+        others[mask] = value
+        self.other_positions = others
+
+    def set_positions(self, positions: dict[str, float]) -> None:
+        """Sets joints outside the group by name (a MoveIt robot state's joint_state); names the
+        robot does not have and the group's own joints are left out.
+
+        Raises:
+            ValueError: a value is not finite.
+        """
+        plant, instance = self._plant, self._model.instance
+        index = {int(i): k for k, i in enumerate(self._model.other_indices)}
+        others = self._other_positions.copy()
+        for name, value in positions.items():
+            if plant.HasJointNamed(name, instance):
+                k = index.get(plant.GetJointByName(name, instance).position_start())
+                if k is not None:
+                    others[k] = value
+        self.other_positions = others
 
     def full_q(self, q) -> np.ndarray:
-        """Returns the plant's 9 positions for a 7-joint arm q (fingers added) or a 9-vector.
+        """Returns the plant's positions for a group q (the other joints added) or for all of
+        the plant's positions.
 
         Raises:
             ValueError: q has the wrong size or is not finite.
         """
         q = np.asarray(q, dtype=float).reshape(-1)
-        if q.size == 7:
-            full = np.empty(9)
-            full[self._model.arm_indices] = q
-            full[self._model.finger_indices] = self._finger_positions
+        n, total = self._model.num_joints, self._plant.num_positions()
+        if q.size == n:
+            full = np.empty(total)
+            full[self._model.group_indices] = q
+            full[self._model.other_indices] = self._other_positions
             q = full
-        elif q.size != 9:
-            raise ValueError(f"q must have 7 (arm) or 9 (arm and fingers) values, got {q.size}")
+        elif q.size != total:
+            raise ValueError(
+                f"q must have {n} (the group's joints) or {total} (all joints) values, got {q.size}"
+            )
         if not np.all(np.isfinite(q)):
             raise ValueError(f"q is not finite: {q.tolist()}")
         return q
 
     def arm_q(self, q) -> np.ndarray:
-        """Returns the 7 arm joints of a 7- or 9-vector q."""
-        return self.full_q(q)[self._model.arm_indices]
+        """Returns the group's joints of a group or full q."""
+        return self.full_q(q)[self._model.group_indices]
 
     def plant_context(self, q):
         """Returns a plant context of this scene's model at q (shared scratch: do not keep it)."""
@@ -268,12 +327,11 @@ class PlanningScene:
         return self._checker.CheckEdgeCollisionFree(self.full_q(q_a), self.full_q(q_b))
 
     def in_joint_limits(self, q, tolerance: float = 1e-9) -> bool:
-        """True when every arm joint of q is within its limits (fingers are not checked)."""
-        q = self.full_q(q)
-        idx = self._model.arm_indices
-        lower = self.plant.GetPositionLowerLimits()[idx] - tolerance
-        upper = self.plant.GetPositionUpperLimits()[idx] + tolerance
-        return bool(np.all(q[idx] >= lower) and np.all(q[idx] <= upper))
+        """True when every joint of the group is within its limits at q (the others are not
+        checked)."""
+        q = self.arm_q(q)
+        lower, upper = self.lower - tolerance, self.upper + tolerance
+        return bool(np.all(q >= lower) and np.all(q <= upper))
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """Returns the pairs of names (robot links, object names) in collision at q, sorted:
@@ -345,10 +403,14 @@ class PlanningScene:
         """Replaces the whole scene by our scene YAML (``planning.io.scene_files``)."""
         scene_files.load_scene_yaml(self, filename)
 
-    def load_moveit(self, filename) -> None:
+    def load_moveit(self, filename, *, strict: bool = False, package_paths=None):
         """Replaces the whole scene by a MoveIt scene: a PlanningScene YAML (``.yaml``, ``.yml``)
-        or the text format (``.scene``); see ``planning.io.moveit_scene``."""
-        scene_files.load_moveit_scene(self, filename)
+        or the text format (``.scene``); see ``planning.io.moveit_scene``. What MoveIt would
+        load but this cannot represent is left out with one warning per object (an error with
+        ``strict``). Returns the ``MoveItScene`` (its start state, warnings, skipped objects)."""
+        return scene_files.load_moveit_scene(
+            self, filename, strict=strict, package_paths=package_paths
+        )
 
     def save_yaml(self, filename) -> None:
         """Writes the scene in our YAML (``planning.io.scene_files``)."""
@@ -362,7 +424,7 @@ class PlanningScene:
 
     # --------------------------------------------------------------------------- private ----
     def _attachment_body(self):
-        return self.plant.GetBodyByName(panda.ATTACHMENT_BODY, self._model.instance)
+        return self.plant.GetBodyByName(self._model.attachment_body, self._model.instance)
 
     def _add_geometry(self, group: str, body, obj: SceneObject) -> None:
         self.version += 1
@@ -384,7 +446,9 @@ class PlanningScene:
 
     def _link_index(self, name: str):
         if not self._plant.HasBodyNamed(name, self._model.instance):
-            raise PlanningError(ErrorCode.INVALID_OBJECT_NAME, f"the Panda has no link {name!r}")
+            raise PlanningError(
+                ErrorCode.INVALID_OBJECT_NAME, f"{self._model.robot.name} has no link {name!r}"
+            )
         return self._plant.GetBodyByName(name, self._model.instance).index()
 
     def _describe(self, query_object, geometry_id):

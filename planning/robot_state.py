@@ -64,15 +64,16 @@ class RobotState:
 
     Args:
         scene: the ``PlanningScene`` (robot model, objects, collision checker).
-        q: the initial configuration (7 arm joints, rad, or all 9 positions); "ready" if None.
+        q: the initial configuration (the group's joints, or all of the plant's positions); the
+            model's ``home`` ("ready" for the Panda) when None.
         ik_options: IK options; the scene configuration's ``ik`` when None.
     """
 
     def __init__(self, scene, q=None, *, ik_options: IkOptions | None = None):
         self._scene = scene
         self._ik_options = ik_options or scene.config.ik
-        self._ee_frame = scene.config.model.ee_frame
-        self._q = scene.full_q(self.named("ready") if q is None else q)
+        self._ee_frame = scene.model.ee_frame
+        self._q = scene.full_q(scene.model.home if q is None else q)
         self._context = scene.plant.CreateDefaultContext()
         self._ik = None
         self._reader = None

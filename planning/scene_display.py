@@ -1,5 +1,11 @@
 """Meshcat display of a planning scene: the robot, world objects, and held objects in another
-colour."""
+colour.
+
+An object with a colour of its own (``SceneObject.color``: a MoveIt scene's ``object_colors``,
+or the colour of its shapes in a ``.scene`` file) is drawn in it; the others are grey (the table
+brown) in the world and orange in the hand. A convex object (a mesh, a cone) is drawn as the
+hull it is checked as.
+"""
 
 from __future__ import annotations
 
@@ -11,11 +17,17 @@ TABLE_COLOR = Rgba(0.55, 0.4, 0.25, 1.0)
 PREFIX = "planning/objects"
 
 
+def object_color(obj, default: Rgba) -> Rgba:
+    """The colour an object is drawn in: its own, else ``default``."""
+    return default if obj.color is None else Rgba(*obj.color)
+
+
 def publish_scene(scene, q) -> None:
     """Draws ``scene`` with the robot at q in the scene's Meshcat (nothing without one).
 
-    World objects are grey (the table brown) and held objects orange, each at
-    ``planning/objects/<world|attached>/<name>``; objects removed since the last call are deleted.
+    World objects are at ``planning/objects/world/<name>``, held ones at
+    ``planning/objects/attached/<name>``, each in its colour (see the module's docstring);
+    objects removed since the last call are deleted.
     """
     meshcat = scene.meshcat
     if meshcat is None:
@@ -29,10 +41,10 @@ def publish_scene(scene, q) -> None:
     meshcat.Delete(PREFIX)
     for name, obj in scene.world_objects.items():
         path = f"{PREFIX}/world/{name}"
-        color = TABLE_COLOR if name == "table" else WORLD_COLOR
+        color = object_color(obj, TABLE_COLOR if name == "table" else WORLD_COLOR)
         meshcat.SetObject(path, obj.drake_shape(), color)
         meshcat.SetTransform(path, obj.X_PO)
-    for name in scene.attached_objects:
+    for name, obj in scene.attached_objects.items():
         path = f"{PREFIX}/attached/{name}"
-        meshcat.SetObject(path, scene.attached_objects[name].drake_shape(), ATTACHED_COLOR)
+        meshcat.SetObject(path, obj.drake_shape(), object_color(obj, ATTACHED_COLOR))
         meshcat.SetTransform(path, scene.object_pose(name, q))

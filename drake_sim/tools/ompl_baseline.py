@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter
-from planning.model.layout import NUM_ARM_JOINTS
 
 
 def ompl_available() -> bool:
@@ -32,23 +31,24 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
         timeout: s for the search (simplification gets the time left, at least 0.1 s).
 
     Returns:
-        (N, 7) waypoints, or None when OMPL found no exact solution.
+        (N, n) waypoints, or None when OMPL found no exact solution.
     """
     from ompl import base as ob
     from ompl import geometric as og
 
     adapter = CheckerAdapter(scene)
-    space = ob.RealVectorStateSpace(NUM_ARM_JOINTS)
-    bounds = ob.RealVectorBounds(NUM_ARM_JOINTS)
-    for i in range(NUM_ARM_JOINTS):
+    n = scene.num_joints
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
         bounds.setLow(i, float(adapter.lower[i]))
         bounds.setHigh(i, float(adapter.upper[i]))
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
-    q = np.empty(NUM_ARM_JOINTS)
+    q = np.empty(n)
 
     def valid(state) -> bool:
-        for i in range(NUM_ARM_JOINTS):
+        for i in range(n):
             q[i] = state[i]
         return adapter.config_free(q)
 
@@ -56,7 +56,7 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
     step = scene.checker.edge_step_size()
     setup.getSpaceInformation().setStateValidityCheckingResolution(step / space.getMaximumExtent())
     start, goal = space.allocState(), space.allocState()
-    for i in range(NUM_ARM_JOINTS):
+    for i in range(n):
         start[i] = float(q_start[i])
         goal[i] = float(q_goal[i])
     setup.setStartAndGoalStates(start, goal)
@@ -67,6 +67,4 @@ def ompl_plan(scene, q_start, q_goal, timeout: float, simplify: bool = True):
     if simplify:
         setup.simplifySolution(max(0.1, timeout - setup.getLastPlanComputationTime()))
     path = setup.getSolutionPath()
-    return np.array(
-        [[path.getState(k)[i] for i in range(NUM_ARM_JOINTS)] for k in range(path.getStateCount())]
-    )
+    return np.array([[path.getState(k)[i] for i in range(n)] for k in range(path.getStateCount())])

@@ -45,6 +45,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import logging
 import sys
 import tempfile
 import time
@@ -58,24 +59,35 @@ from drake_sim.tools.ompl_baseline import ompl_available, ompl_plan
 from drake_sim.tools.plan_benchmark_profile import PhaseProfiler, breakdown
 from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
+from planning.config import PandaPlanningConfig, check_panda_config
 from planning.errors import PlanningError
 from planning.io import mbm, problem_files
-from planning.model.layout import ARM_Q, FINGER_Q
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
 from planning.paths import path_length
 from planning.planning_scene import PlanningScene
-from planning.task.random_problems import PANDA_WORKSPACE, group_joint_names, random_problems
+from planning.task.random_problems import group_joint_names, random_problems, workspace_of
 
 _FINE = 0.01  # rad
 RANDOM_FAMILY = "random"
 """The family folder of random problems (``--random``, ``--save-problems``)."""
 
 
+def robot_config(robot: str) -> PandaPlanningConfig:
+    """The planning configuration of ``--robot``: the Panda with its table (the MBM scenes
+    replace it), any other robot without one."""
+    config = PandaPlanningConfig()
+    if robot != "panda":
+        config.model.description = robot
+        config.table = None
+    check_panda_config(config, f"--robot {robot}")
+    return config
+
+
 def _load(scene, problem):
     scene.load_moveit(problem.scene_file)
-    request = mbm.load_request(problem.request_file)
-    scene.finger_positions = request.q_start[FINGER_Q]
-    return request.q_start[ARM_Q], request.q_goal[ARM_Q]
+    q_start, q_goal, others = mbm.read_request(problem.request_file, scene.model.joint_names)
+    scene.set_positions(others)
+    return q_start, q_goal
 
 
 def run_problem(scene, planner, problem, timeout: float, profiler=None) -> dict:
@@ -207,11 +219,19 @@ def _parse_args(argv):
         f"${mbm.ENV_VAR}, else the cache, else downloaded once with pip into the cache)",
     )
     parser.add_argument(
+        "--robot",
+        default="panda",
+        metavar="NAME|FILE",
+        help="the robot: a shipped one (panda, ur5, fetch, baxter: its MBM set is fetched like "
+        "the Panda's), a robot description YAML or a *_moveit_config folder (give its problems "
+        "with --dataset, or --random)",
+    )
+    parser.add_argument(
         "--families",
         nargs="+",
-        choices=[*mbm.FAMILIES, RANDOM_FAMILY],
-        help="families to run (default: the MBM ones; a folder of saved random problems: "
-        f"{RANDOM_FAMILY})",
+        metavar="FAMILY",
+        help="families to run (default: every family of the set; a folder of saved random "
+        f"problems: {RANDOM_FAMILY})",
     )
     parser.add_argument("--limit", type=cli.positive_int, help="first N problems per family")
     parser.add_argument(
@@ -260,14 +280,20 @@ def _parse_args(argv):
         return args
     if args.save_problems is not None:
         raise ConfigError("--save-problems saves the problems of --random: give --random N")
+    shipped = args.robot in mbm.ARCHIVE_SHA256
+    if args.dataset is None and not shipped:
+        raise ConfigError(
+            f"--robot {args.robot}: no MotionBenchMaker set ships for it: give its problems "
+            "with --dataset, or make some with --random N"
+        )
     try:
-        args.dataset = mbm.find_problems(args.dataset)
+        args.dataset = mbm.find_problems(args.dataset, robot=args.robot if shipped else "panda")
     except (FileNotFoundError, RuntimeError, ValueError) as e:
         raise ConfigError(str(e).splitlines()[0]) from None
     if args.families is None:  # a folder of saved random problems runs as it is
-        saved = (args.dataset / RANDOM_FAMILY).is_dir()
-        mbm_sets = any((args.dataset / f).is_dir() for f in mbm.FAMILIES)
-        args.families = [RANDOM_FAMILY] if saved and not mbm_sets else list(mbm.FAMILIES)
+        found = mbm.families_in(args.dataset)
+        others = [f for f in found if f != RANDOM_FAMILY]
+        args.families = others or found
     missing = [f for f in args.families if not (args.dataset / f).is_dir()]
     if missing:
         raise ConfigError(f"{args.dataset}: no MBM family {', '.join(missing)}")
@@ -300,7 +326,7 @@ def make_random_problems(scene, count: int, seed: int, folder: Path) -> list:
     ``folder/random/`` (``planning.io.problem_files``); returns, in order, an ``MbmProblem``
     for each problem made and the ``ProblemGenerationError`` of each that could not be."""
     result = []
-    workspace = PANDA_WORKSPACE  # the robot's part: its scene, and where it reaches
+    workspace = workspace_of(scene)  # the robot's part: its scene, and where it reaches
     for problem in random_problems(scene, count, seed, workspace):
         if isinstance(problem, Exception):
             result.append(problem)
@@ -341,7 +367,10 @@ def _main(argv) -> int:
         ou.setLogLevel(ou.LogLevel.LOG_WARN)
     # The compiled planner from the first problem: a fresh install waits for its build here.
     planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planning.benchmark"))
-    scene = PlanningScene()
+    # MBM scenes name joints and allowed pairs the robot's URDF lacks (VAMP's models fix the
+    # grippers): one warning per scene would bury the table; failures still raise.
+    logging.getLogger("planning.io").setLevel(logging.ERROR)
+    scene = PlanningScene(robot_config(args.robot))
     planner = MotionPlanner(scene, options)
     joint_names = list(group_joint_names(scene))
     with contextlib.ExitStack() as stack:

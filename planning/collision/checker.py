@@ -1,17 +1,16 @@
-"""Collision queries of 7-joint arm configurations and segments on a ``PlanningScene``'s checker.
+"""Collision queries of a planning group's configurations and segments on a scene's checker.
 
 ``CheckerAdapter`` sends queries to the scene's ``SceneGraphCollisionChecker`` (so objects added
 at run time are seen; ``planning.collision.sphere_checker.SphereCheckerAdapter`` answers the same
 queries with sphere models first): ``CheckEdgeCollisionFree`` at the checker's edge step while
 searching, and ``CheckConfigsCollisionFree`` (parallel over both cores) at a fine step to
-validate. The fingers stay at the scene's positions.
+validate. The joints outside the group stay at the scene's positions.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planning.model.layout import NUM_ARM_JOINTS
 from planning.paths import densify
 
 _SHORT_EDGE_STEPS = 12  # edges of at most this many steps are checked by Drake in one call
@@ -32,7 +31,8 @@ def _bisection_order(n: int) -> np.ndarray:
 
 
 class CheckerAdapter:
-    """7-joint collision queries on a ``PlanningScene``'s checker (fingers from the scene).
+    """Collision queries of the group's joints on a ``PlanningScene``'s checker (the other
+    joints from the scene).
 
     Args:
         scene: the planning scene.
@@ -44,11 +44,9 @@ class CheckerAdapter:
         self._resolution = resolution
         self._proven: set[bytes] = set()  # edges found free at ``resolution``
         self._checker = scene.checker
-        self._template = scene.full_q(np.zeros(NUM_ARM_JOINTS))
+        self._template = scene.full_q(np.zeros(scene.num_joints))
         self._arm = scene.model.arm_indices
-        idx = self._arm
-        self.lower = scene.plant.GetPositionLowerLimits()[idx].copy()
-        self.upper = scene.plant.GetPositionUpperLimits()[idx].copy()
+        self.lower, self.upper = scene.lower, scene.upper
 
     def full(self, q) -> np.ndarray:
         full = self._template.copy()

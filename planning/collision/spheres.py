@@ -1,8 +1,8 @@
-"""Fast collision checks of many Panda configurations with sphere models.
+"""Fast collision checks of many configurations of a robot's planning group with sphere models.
 
-The robot's collision geometry (arm links, hand, fingers at the scene's finger positions, and
-held objects) is covered by spheres (``sphere_robot``); world objects stay exact boxes,
-cylinders and spheres. ``SphereCollisionModel.classify`` runs forward kinematics for each
+The robot's collision geometry (its links, the joints outside the group at the scene's
+positions, and held objects) is covered by spheres (``sphere_robot``); world objects stay exact
+boxes, cylinders and spheres. ``SphereCollisionModel.classify`` runs forward kinematics for each
 configuration, then exact point-to-primitive distances (and sphere pair distances for
 self-collision), in compiled loops (``sphere_kernel``), and sorts each configuration into:
 
@@ -48,8 +48,6 @@ from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics, fold_fixed_steps, fold_points
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
 from planning.collision.sphere_robot import held_cover, robot_hulls, robot_spheres, shape_hull
-from planning.model.layout import NUM_ARM_JOINTS
-from planning.model.panda import ATTACHMENT_BODY
 
 __all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
 # (step, point) arrays of the kernel data whose points are fixed on kinematic steps.
@@ -83,7 +81,8 @@ class SphereCollisionModel:
         self._world = int(plant.world_body().index())
         self._filtered = checker.GetFilteredCollisionMatrix()
         self._padding = checker.GetPaddingMatrix()
-        self._attachment = int(plant.GetBodyByName(ATTACHMENT_BODY, scene.model.instance).index())
+        model = scene.model
+        self._attachment = int(plant.GetBodyByName(model.attachment_body, model.instance).index())
         self._held_cache: dict[tuple, SphereSet] = {}
         self._groups_cache: dict[int, tuple] = {}  # body -> _body_groups
         self._signature = self._held_signature = self._robot_signature = self._version = None
@@ -107,8 +106,9 @@ class SphereCollisionModel:
             self.supported = False
         self.sync()
         # Compiles or loads the kernels now, not mid-request.
-        self.classify(np.zeros((1, NUM_ARM_JOINTS)))
-        self.prefixes(np.zeros((1, NUM_ARM_JOINTS)), np.zeros((1, NUM_ARM_JOINTS)), 1.0, False)
+        zero = np.zeros((1, scene.num_joints))
+        self.classify(zero)
+        self.prefixes(zero, zero, 1.0, False)
 
     # ---------------------------------------------------------------------------- scene ----
     def sync(self, *, rebuild_robot: bool = True) -> bool:
@@ -136,7 +136,7 @@ class SphereCollisionModel:
         signature = (
             tuple((n, id(o)) for n, o in world.items()),
             (tuple((n, id(o)) for n, o in held.items()), filtered.tobytes()),
-            tuple(scene.finger_positions),
+            tuple(scene.other_positions),
         )
         objects = (tuple(world.values()), tuple(held.values()))
         if not rebuild_robot and signature[1:] != self._robot_signature:
@@ -147,7 +147,7 @@ class SphereCollisionModel:
             return True
         self._signature = signature
         self._alive["all"] = objects
-        self._template = scene.full_q(np.zeros(NUM_ARM_JOINTS))
+        self._template = scene.full_q(np.zeros(scene.num_joints))
         self._arm = scene.model.arm_indices
         self._objects_ok = all(o.shape in ("box", "cylinder", "sphere") for o in world.values())
         self._objects_ok &= all(o.shape in ("box", "cylinder", "sphere") for o in held.values())

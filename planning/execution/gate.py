@@ -6,11 +6,12 @@ from a file and executed in a running station, and every arm step of
 ``planning.task.pick_place``. The checks, in this order; the first violation is raised, and
 nothing is commanded:
 
-1. the plan is a ``Plan`` for the robot's seven arm joints, its stored values (waypoints,
-   limits, fingers, duration) finite;
+1. the plan is a ``Plan`` for the scene's robot and planning group (``Plan.check_robot``), its
+   stored values (waypoints, limits, fingers, duration) finite and of the robot's sizes;
 2. its stored limits within the robot's own (``limits``: the planner's ``TimingOptions``, the
-   Panda's datasheet limits): a plan may be slower than the robot, never faster;
-3. every waypoint within the robot's position limits (the scene's plant);
+   robot model's limits): a plan may be slower than the robot, never faster;
+3. every waypoint within the group's position limits, the fingers within theirs (the scene's
+   robot model and plant);
 4. the trajectory's start at the measured joints, within ``start_tolerance``;
 5. the trajectory itself, sampled every ``dt`` and at its waypoint times: finite, within the
    position limits, and within the robot's velocity and acceleration limits (so a plan whose
@@ -31,8 +32,6 @@ from __future__ import annotations
 import numpy as np
 
 from planning.errors import ErrorCode, PlanningError
-from planning.model.layout import NUM_ARM_JOINTS, NUM_FINGERS
-from planning.model.panda import ARM_JOINTS
 from planning.plan import Plan
 
 POSITION_TOLERANCE = 1e-6
@@ -59,10 +58,10 @@ def check_before_motion(
     Args:
         plan: the ``Plan`` about to be executed.
         scene: the ``PlanningScene`` now (objects, attached objects, the robot's plant).
-        q_measured: (7,) the measured arm joints, rad.
-        fingers_measured: (2,) the measured finger positions, m.
-        limits: the robot's own limits: ``max_velocity`` (7,) rad/s and ``max_acceleration``
-            (7,) rad/s^2 (e.g. ``TimingOptions``, unscaled).
+        q_measured: (n,) the measured joints of the group, rad.
+        fingers_measured: the measured finger positions (the Panda's: 2, m).
+        limits: the robot's own limits: ``max_velocity`` (n,) rad/s and ``max_acceleration``
+            (n,) rad/s^2 (e.g. the planner's ``TimingOptions``, unscaled).
         start_tolerance: rad, the largest joint gap between the trajectory's start and
             ``q_measured``.
         resolution: rad, joint-space step of the collision check.
@@ -73,38 +72,41 @@ def check_before_motion(
             trajectory starts more than ``start_tolerance`` from the measured joints (or the
             measured state is not finite).
     """
-    _check_values(plan)
+    names = _check_values(plan, scene)
     robot_v = np.asarray(limits.max_velocity, dtype=float)
     robot_a = np.asarray(limits.max_acceleration, dtype=float)
-    _check_stored_limits(plan, robot_v, robot_a)
-    lower, upper = _position_limits(scene)
+    _check_stored_limits(plan, robot_v, robot_a, names)
+    lower, upper = scene.lower, scene.upper
     for k, q in enumerate(plan.waypoints):
-        _check_positions(q, lower, upper, f"waypoint {k}")
-    _check_start(plan, q_measured, fingers_measured, start_tolerance)
-    _check_trajectory(plan, (lower, upper), robot_v, robot_a, dt)
+        _check_positions(q, lower, upper, f"waypoint {k}", names)
+    _check_fingers(plan, scene)
+    _check_start(plan, q_measured, fingers_measured, start_tolerance, names)
+    _check_trajectory(plan, (lower, upper), robot_v, robot_a, dt, names)
     fingers = np.asarray(fingers_measured, dtype=float)
     try:
         plan.validate(scene, resolution, finger_positions=fingers)
     except PlanningError as e:
-        where = f"with the fingers as measured ({fingers[0]:.4f}, {fingers[1]:.4f} m)"
-        raise _invalid(f"{where}, {e.message}") from None
+        shown = ", ".join(f"{f:.4f}" for f in fingers)
+        raise _invalid(f"with the fingers as measured ({shown}), {e.message}") from None
 
 
 def _invalid(message: str) -> PlanningError:
     return PlanningError(ErrorCode.INVALID_MOTION_PLAN, message)
 
 
-def _check_values(plan) -> None:
+def _check_values(plan, scene) -> list[str]:
+    """Checks the plan is for the scene's robot, of its sizes and finite; returns the group's
+    joint names."""
     if not isinstance(plan, Plan):
         raise _invalid(f"not a Plan: {type(plan).__name__}")
-    joints = plan.robot.get("joints") if isinstance(plan.robot, dict) else None
-    if not isinstance(joints, list | tuple) or list(joints) != list(ARM_JOINTS):
-        raise _invalid(f"the plan is for the joints {joints}, the robot's are {list(ARM_JOINTS)}")
+    plan.check_robot(scene)
+    names = scene.model.joint_names
+    n, fingers = len(names), int(scene.model.finger_mask.sum())
     sizes = {
-        "waypoints": (len(plan.waypoints), NUM_ARM_JOINTS),
-        "max_velocity": (NUM_ARM_JOINTS,),
-        "max_acceleration": (NUM_ARM_JOINTS,),
-        "finger_positions": (NUM_FINGERS,),
+        "waypoints": (len(plan.waypoints), n),
+        "max_velocity": (n,),
+        "max_acceleration": (n,),
+        "finger_positions": (fingers,),
     }
     for name, shape in sizes.items():
         value = np.asarray(getattr(plan, name), dtype=float)
@@ -116,41 +118,52 @@ def _check_values(plan) -> None:
             raise _invalid(f"the plan's {name}[{index}] is {value[tuple(bad[0])]}, not finite")
     if not np.isfinite(plan.duration) or plan.duration < 0.0:
         raise _invalid(f"the plan's duration is {plan.duration} s, not a finite time")
+    return names
 
 
-def _check_stored_limits(plan, robot_v: np.ndarray, robot_a: np.ndarray) -> None:
+def _check_fingers(plan, scene) -> None:
+    """The plan's finger positions within the finger joints' limits (the scene's plant)."""
+    model, plant = scene.model, scene.plant
+    indices = model.finger_indices
+    lower = plant.GetPositionLowerLimits()[indices]
+    upper = plant.GetPositionUpperLimits()[indices]
+    for k, value in enumerate(plan.finger_positions):
+        if not lower[k] - POSITION_TOLERANCE <= value <= upper[k] + POSITION_TOLERANCE:
+            raise _invalid(
+                f"the plan's finger_positions[{k}] {value:.4f} is outside the finger's limits "
+                f"[{lower[k]:.4f}, {upper[k]:.4f}]"
+            )
+
+
+def _check_stored_limits(plan, robot_v: np.ndarray, robot_a: np.ndarray, names) -> None:
     for name, stored, robot, unit in (
         ("max_velocity", plan.max_velocity, robot_v, "rad/s"),
         ("max_acceleration", plan.max_acceleration, robot_a, "rad/s^2"),
     ):
-        for j in range(NUM_ARM_JOINTS):
-            what = f"{ARM_JOINTS[j]}: the plan's {name} {stored[j]:.4g} {unit}"
+        for j in range(len(names)):
+            what = f"{names[j]}: the plan's {name} {stored[j]:.4g} {unit}"
             if stored[j] > robot[j] * (1.0 + RATE_TOLERANCE):
                 raise _invalid(f"{what} is above the robot's limit {robot[j]:.4g} {unit}")
             if stored[j] <= 0.0:
                 raise _invalid(f"{what} is not > 0")
 
 
-def _position_limits(scene) -> tuple[np.ndarray, np.ndarray]:
-    """The robot's arm joint limits (lower, upper), rad, from the scene's plant."""
-    arm = scene.model.arm_indices
-    return scene.plant.GetPositionLowerLimits()[arm], scene.plant.GetPositionUpperLimits()[arm]
-
-
-def _check_positions(q: np.ndarray, lower, upper, where: str) -> None:
+def _check_positions(q: np.ndarray, lower, upper, where: str, names) -> None:
     outside = (q < lower - POSITION_TOLERANCE) | (q > upper + POSITION_TOLERANCE)
     if outside.any():
         j = int(np.argmax(outside))
         raise _invalid(
-            f"{where}: {ARM_JOINTS[j]} at {q[j]:.4f} rad is outside its limits "
+            f"{where}: {names[j]} at {q[j]:.4f} rad is outside its limits "
             f"[{lower[j]:.4f}, {upper[j]:.4f}] rad"
         )
 
 
-def _check_start(plan: Plan, q_measured, fingers_measured, tolerance: float) -> None:
+def _check_start(plan: Plan, q_measured, fingers_measured, tolerance: float, names) -> None:
     q = np.asarray(q_measured, dtype=float)
-    measured = np.concatenate([q.reshape(-1), np.asarray(fingers_measured, dtype=float)])
-    if measured.size != NUM_ARM_JOINTS + NUM_FINGERS or not np.all(np.isfinite(measured)):
+    fingers = np.asarray(fingers_measured, dtype=float).reshape(-1)
+    measured = np.concatenate([q.reshape(-1), fingers])
+    size = len(names) + len(plan.finger_positions)
+    if measured.size != size or not np.all(np.isfinite(measured)):
         raise PlanningError(
             ErrorCode.INVALID_START, f"the measured state is not finite: {measured.tolist()}"
         )
@@ -161,12 +174,12 @@ def _check_start(plan: Plan, q_measured, fingers_measured, tolerance: float) -> 
         raise PlanningError(
             ErrorCode.INVALID_START,
             f"the plan starts {gaps[j]:.3f} rad from the robot's current joints "
-            f"({ARM_JOINTS[j]}: plan {start[j]:.4f} rad, measured {q[j]:.4f} rad; "
+            f"({names[j]}: plan {start[j]:.4f} rad, measured {q[j]:.4f} rad; "
             f"tolerance {tolerance} rad)",
         )
 
 
-def _check_trajectory(plan: Plan, position_limits, robot_v, robot_a, dt: float) -> None:
+def _check_trajectory(plan: Plan, position_limits, robot_v, robot_a, dt: float, names) -> None:
     """Samples the trajectory and raises at the first sample (in time) out of the limits."""
     step = max(dt, plan.duration / MAX_SAMPLES)
     ts = np.unique(np.concatenate([np.arange(0.0, plan.duration, step), plan.times]))
@@ -195,12 +208,12 @@ def _check_trajectory(plan: Plan, position_limits, robot_v, robot_a, dt: float) 
     t = ts[k]
     if not np.all(np.isfinite(values[k])):
         j = int(np.argmax(~np.isfinite(values[k])))
-        raise _invalid(f"at t = {t:.3f} s the {name} of {ARM_JOINTS[j]} is {values[k][j]}")
+        raise _invalid(f"at t = {t:.3f} s the {name} of {names[j]} is {values[k][j]}")
     if limit is None:
-        _check_positions(q[k], lower, upper, f"at t = {t:.3f} s")
+        _check_positions(q[k], lower, upper, f"at t = {t:.3f} s", names)
     unit = {"velocity": "rad/s", "acceleration": "rad/s^2"}[name]
     j = int(np.argmax(np.abs(values[k]) / limit))
     raise _invalid(
-        f"at t = {t:.3f} s {ARM_JOINTS[j]} {name} {values[k][j]:.4g} {unit} is above the "
+        f"at t = {t:.3f} s {names[j]} {name} {values[k][j]:.4g} {unit} is above the "
         f"robot's limit {limit[j]:.4g} {unit}"
     )

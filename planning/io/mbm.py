@@ -262,10 +262,21 @@ def _extract_archive(sdist: Path, robot: str, out: Path) -> None:
         raise MbmDataError(f"{sdist.name}: not a readable source distribution ({e})") from None
 
 
+def families_in(folder: Path | str) -> list[str]:
+    """The scene families a problems folder holds (its folders with scenes), sorted."""
+    folder = Path(folder)
+    return sorted(p.name for p in folder.iterdir() if p.is_dir() and _is_family(p))
+
+
+def _is_family(folder: Path) -> bool:
+    return next(folder.glob("scene*.yaml"), None) is not None
+
+
 def iter_problems(
     folder: Path | str, families=None, limit: int | None = None
 ) -> Iterator[MbmProblem]:
-    """Yields the problems of a ``problems`` folder, family by family, in number order."""
+    """Yields the problems of a ``problems`` folder, family by family, in number order
+    (``families``: the Panda's ``FAMILIES`` when None)."""
     folder = Path(folder)
     for family in families or FAMILIES:
         scenes = sorted((folder / family).glob("scene*.yaml"))
@@ -275,6 +286,33 @@ def iter_problems(
             number = int(scene_file.stem.removeprefix("scene"))
             request = scene_file.with_name(f"request{number:04d}.yaml")
             yield MbmProblem(family, number, scene_file, request)
+
+
+def read_request(filename: Path | str, joint_names) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Reads a MotionPlanRequest YAML for a planning group: ``(q_start, q_goal, others)``, the
+    start and the goal over ``joint_names`` and the start's other joints by name (MoveIt keeps
+    them where the start state has them).
+
+    Raises:
+        ValueError: a joint of the group is missing or a value is not finite.
+    """
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    data = yaml.load(Path(filename).read_text(), Loader=loader)
+    joint_state = data["start_state"]["joint_state"]
+    start = dict(zip(joint_state["name"], map(float, joint_state["position"]), strict=True))
+    constraints = data["goal_constraints"][0]["joint_constraints"]
+    goal = {c["joint_name"]: float(c["position"]) for c in constraints}
+    names = list(joint_names)
+    missing = [n for n in names if n not in start] + [n for n in names if n not in goal]
+    if missing:
+        raise ValueError(f"{filename}: missing joints {sorted(set(missing))}")
+    q_start = np.array([start[n] for n in names])
+    q_goal = np.array([goal[n] for n in names])
+    others = {n: v for n, v in start.items() if n not in names}
+    values = [*q_start, *q_goal, *others.values()]
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{filename}: non-finite joint values")
+    return q_start, q_goal, others
 
 
 def load_request(filename: Path | str) -> MbmRequest:

@@ -8,11 +8,13 @@ Fields that MoveIt writes in more than one form are ``Any`` and read here: a pos
 ``[x, y, z]`` or ``{x: .., y: .., z: ..}``, an orientation as ``[x, y, z, w]`` or a mapping.
 
 Numbers follow the project's YAML rule: a boolean is not a number, text that reads as a number
-is one (PyYAML reads ``1e-3`` as text), and every number must be finite.
+is one (PyYAML reads ``1e-3`` as text), and every number must be finite. A byte field as
+``ros2 topic echo`` prints it (``b'\\x00'``) reads as its value.
 """
 
 import dataclasses as dc
 import math
+import re
 from typing import Any
 
 from pydrake.math import RigidTransform
@@ -21,9 +23,16 @@ from planning.scene_objects import make_pose
 
 # shape_msgs/SolidPrimitive types and the dimensions of those we read.
 PRIMITIVE_TYPES = {1: "box", 2: "sphere", 3: "cylinder", 4: "cone", 5: "prism"}
-PRIMITIVE_DIMENSIONS = {"box": "[x, y, z]", "sphere": "[radius]", "cylinder": "[height, radius]"}
+PRIMITIVE_DIMENSIONS = {
+    "box": "[x, y, z]",
+    "sphere": "[radius]",
+    "cylinder": "[height, radius]",
+    "cone": "[height, radius]",
+    "prism": "[height]",
+}
 # moveit_msgs/CollisionObject operations.
 OPERATIONS = {0: "ADD", 1: "REMOVE", 2: "APPEND", 3: "MOVE"}
+_BYTE = re.compile(r"b'(?:\\x([0-9a-fA-F]{2})|(.))'")  # b'\x00' or b'a', as ROS 2 prints bytes
 
 
 def _list():
@@ -58,10 +67,43 @@ class Transform:
 
 
 @dc.dataclass
+class Point32:
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+@dc.dataclass
+class Polygon:
+    points: list[Point32] = _list()
+
+
+@dc.dataclass
 class SolidPrimitive:
     type: int | str = 0
     dimensions: list[float] = _list()
-    polygon: Any = None
+    polygon: Polygon | None = None  # ROS 2: a prism's cross-section
+
+
+@dc.dataclass
+class MeshTriangle:
+    vertex_indices: list[int] = _list()
+
+
+@dc.dataclass
+class Mesh:
+    """shape_msgs/Mesh, plus what robowflex writes instead of triangles: a mesh file
+    (``resource``: a path or ``package://`` URI) and its scale per axis (``dimensions``)."""
+
+    triangles: list[MeshTriangle] = _list()
+    vertices: list[Any] = _list()  # geometry_msgs/Point: [x, y, z] or {x:, y:, z:}
+    resource: str = ""
+    dimensions: list[float] = _list()
+
+
+@dc.dataclass
+class Plane:
+    coef: list[float] = _list()  # a, b, c, d of ax + by + cz + d = 0
 
 
 @dc.dataclass
@@ -78,9 +120,9 @@ class CollisionObject:
     type: ObjectType | None = None
     primitives: list[SolidPrimitive] = _list()
     primitive_poses: list[Pose] = _list()
-    meshes: list[Any] = _list()
+    meshes: list[Mesh] = _list()
     mesh_poses: list[Pose] = _list()
-    planes: list[Any] = _list()
+    planes: list[Plane] = _list()
     plane_poses: list[Pose] = _list()
     subframe_names: list[str] = _list()
     subframe_poses: list[Pose] = _list()
@@ -252,17 +294,19 @@ def pose(value, path: str, *, position: str = "position", orientation: str = "or
 
 
 def primitive(value, path: str) -> tuple[str, tuple[float, ...]]:
-    """Returns the shape and the size (as ``scene_objects.SHAPE_SIZES``) of a SolidPrimitive.
+    """Returns the shape and the size of a SolidPrimitive: box, sphere and cylinder as
+    ``scene_objects.SHAPE_SIZES`` (a cylinder's (radius, length)), a cone's (radius, length)
+    and a prism's (height,).
 
     Raises:
-        ValueError: naming ``path``: an unsupported type (cone, prism), a wrong number of
-            dimensions, or a dimension that is not a positive number.
+        ValueError: naming ``path``: an unknown type, a wrong number of dimensions, or a
+            dimension that is not a positive number.
     """
-    kind = value.get("type", 0)
+    kind = byte(value.get("type", 0))
     kind = PRIMITIVE_TYPES.get(kind, kind) if _integer(kind) else str(kind).lower()
     if kind not in PRIMITIVE_DIMENSIONS:
-        supported = ", ".join(PRIMITIVE_DIMENSIONS)
-        raise ValueError(f"{path}.type: {kind!r} is not supported (only {supported})")
+        known = ", ".join(f"{k} {n}" for k, n in PRIMITIVE_TYPES.items())
+        raise ValueError(f"{path}.type: unknown primitive type {kind!r} (known: {known})")
     dims = [number(d, f"{path}.dimensions[{i}]") for i, d in enumerate(value.get("dimensions", []))]
     expected = PRIMITIVE_DIMENSIONS[kind]
     if len(dims) != expected.count(",") + 1:
@@ -270,9 +314,28 @@ def primitive(value, path: str) -> tuple[str, tuple[float, ...]]:
     for i, d in enumerate(dims):
         if d <= 0.0:
             raise ValueError(f"{path}.dimensions[{i}] must be positive, got {d}")
-    if kind == "cylinder":
-        return "cylinder", (dims[1], dims[0])  # (radius, length)
+    if kind in ("cylinder", "cone"):
+        return kind, (dims[1], dims[0])  # (radius, length)
     return kind, tuple(dims)
+
+
+def color(value, path: str) -> tuple[float, float, float, float]:
+    """Returns (r, g, b, a) of a std_msgs/ColorRGBA (a mapping or a list), clipped to [0, 1].
+
+    Raises:
+        ValueError: naming ``path``, for a value that is no colour.
+    """
+    if value is None:
+        raise ValueError(f"{path}: an object colour needs a color {{r, g, b, a}}")
+    return tuple(min(max(c, 0.0), 1.0) for c in vector(value, "rgba", path))
+
+
+def byte(value):
+    """Returns the value of a byte field printed by ``ros2 topic echo`` (``b'\\x00'``), or
+    ``value`` unchanged."""
+    if isinstance(value, str) and (found := _BYTE.fullmatch(value.strip())):
+        return int(found[1], 16) if found[1] else ord(found[2])
+    return value
 
 
 def operation(value, path: str) -> str:
@@ -282,6 +345,7 @@ def operation(value, path: str) -> str:
     Raises:
         ValueError: naming ``path``, for anything else.
     """
+    value = byte(value)
     name = OPERATIONS.get(value) if _integer(value) else str(value).upper()
     if name not in OPERATIONS.values():
         raise ValueError(f"{path}: unknown operation {value!r} (0 ADD, 1 REMOVE, 2 APPEND, 3 MOVE)")

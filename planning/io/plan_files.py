@@ -31,13 +31,13 @@ import numpy as np
 from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
-from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, NUM_ARM_JOINTS, NUM_FINGERS
-from planning.scene_objects import SHAPE_SIZES, make_pose, validate_object
+from planning.scene_objects import CONVEX, SHAPE_SIZES, make_pose, validate_object
 
 FORMAT = "drake_sim.plan"
 """The value of a plan file's ``format``."""
-VERSION = 2
-"""The newest plan file version (1: no ``timing``, timed rest to rest)."""
+VERSION = 3
+"""The newest plan file version (1: no ``timing``, timed rest to rest; 2: the Panda's arm only,
+no ``robot.group``; 3: any robot, ``robot.group`` and as many joints as it names)."""
 MAX_JOINT_VALUE = 100.0
 """rad, the largest |waypoint| a file may hold: no joint turns that far (the robot's own limits
 are checked before motion)."""
@@ -59,7 +59,9 @@ FIELDS = (
     "timing",
 )
 """The top-level fields of a plan file, all required (``timing`` from version 2)."""
-_OBJECT_FIELDS = ("name", "shape", "size", "position", "orientation")
+_OBJECT_FIELDS = ("name", "shape", "size", "position", "orientation", "vertices")
+_ROBOT_FIELDS = ("name", "group", "joints", "fingers")
+_PANDA_FINGERS = ["panda_finger_joint1", "panda_finger_joint2"]  # of version 1 and 2 files
 _TIMING_FIELDS = ("method", "max_corner_angle", "path_tolerance", "margin")
 _VERSION_1_TIMING = {"method": "rest_to_rest"}  # version 1 files were timed rest to rest
 
@@ -195,14 +197,21 @@ class _Schema:
             self.fail("version", f"{version} is newer than this library's {VERSION}")
         if version >= 2 and "timing" not in data:
             self.fail("timing", "is missing")
+        robot = self.robot(data["robot"], version)
+        n, fingers = len(robot["joints"]), data["finger_positions"]
+        if isinstance(fingers, list) and len(fingers) != len(robot["fingers"]):
+            self.fail(
+                "finger_positions",
+                f"must have {len(robot['fingers'])} values (robot.fingers), got {len(fingers)}",
+            )
         return {
-            "robot": self.robot(data["robot"]),
-            "waypoints": self.waypoints(data["waypoints"]),
+            "robot": robot,
+            "waypoints": self.waypoints(data["waypoints"], n),
             "max_velocity": self.vector(
-                data["max_velocity"], "max_velocity", 7, low=0.0, open_ends="low"
+                data["max_velocity"], "max_velocity", n, low=0.0, open_ends="low"
             ),
             "max_acceleration": self.vector(
-                data["max_acceleration"], "max_acceleration", 7, low=0.0, open_ends="low"
+                data["max_acceleration"], "max_acceleration", n, low=0.0, open_ends="low"
             ),
             "velocity_scaling": self.number(
                 data["velocity_scaling"], "velocity_scaling", 0.0, 1.0, open_ends="low"
@@ -213,36 +222,48 @@ class _Schema:
             "finger_positions": self.vector(
                 data["finger_positions"],
                 "finger_positions",
-                NUM_FINGERS,
-                low=FINGER_CLOSED,
-                high=FINGER_OPEN,
+                len(robot["fingers"]),
+                low=-MAX_JOINT_VALUE,
+                high=MAX_JOINT_VALUE,
             ),
             "scene": self.scene(data["scene"]),
             "info": self.info(data["info"]),
             "timing": self.timing(data["timing"]) if "timing" in data else dict(_VERSION_1_TIMING),
         }
 
-    def robot(self, value) -> dict:
-        self.mapping(value, "robot", ("name", "joints"))
+    def robot(self, value, version: int) -> dict:
+        """The robot, its group, the group's joints and the fingers' (version 3; a version 1 or
+        2 file is the Panda's arm: its group recorded as "", its two fingers)."""
+        optional = ("group", "fingers") if version < 3 else ()
+        self.mapping(value, "robot", _ROBOT_FIELDS, optional=optional)
         self.string(value["name"], "robot.name")
-        joints = value["joints"]
-        if not isinstance(joints, list) or len(joints) != NUM_ARM_JOINTS:
-            self.fail(
-                "robot.joints", f"must be a list of {NUM_ARM_JOINTS} names, got {_show(joints)}"
-            )
-        for i, name in enumerate(joints):
-            self.string(name, f"robot.joints[{i}]")
-        return {"name": value["name"], "joints": list(joints)}
+        group = self.string(value["group"], "robot.group") if "group" in value else ""
+        joints = self.names(value["joints"], "robot.joints", empty=False)
+        fingers = self.names(value.get("fingers", _PANDA_FINGERS), "robot.fingers", empty=True)
+        return {"name": value["name"], "group": group, "joints": joints, "fingers": fingers}
 
-    def waypoints(self, value) -> np.ndarray:
+    def names(self, value, path: str, *, empty: bool) -> list[str]:
+        if not isinstance(value, list) or not (value or empty):
+            self.fail(
+                path, f"must be a {'' if empty else 'non-empty '}list of names, got {_show(value)}"
+            )
+        for i, name in enumerate(value):
+            self.string(name, f"{path}[{i}]")
+        if len(set(value)) != len(value):
+            self.fail(path, f"names a joint twice: {_show(value)}")
+        return list(value)
+
+    def waypoints(self, value, n: int) -> np.ndarray:
+        """Waypoints of ``n`` values each (as many as ``robot.joints`` names)."""
         if not isinstance(value, list) or not value:
             self.fail("waypoints", f"must be a non-empty list of waypoints, got {_show(value)}")
-        rows = [
-            self.vector(
-                q, f"waypoints[{i}]", NUM_ARM_JOINTS, low=-MAX_JOINT_VALUE, high=MAX_JOINT_VALUE
+        rows = []
+        for i, q in enumerate(value):
+            if isinstance(q, list) and len(q) != n:
+                self.fail(f"waypoints[{i}]", f"must have {n} values (robot.joints), got {len(q)}")
+            rows.append(
+                self.vector(q, f"waypoints[{i}]", n, low=-MAX_JOINT_VALUE, high=MAX_JOINT_VALUE)
             )
-            for i, q in enumerate(value)
-        ]
         return np.array(rows)
 
     def scene(self, value) -> dict:
@@ -260,10 +281,20 @@ class _Schema:
         return value
 
     def scene_object(self, obj, path: str) -> None:
-        self.mapping(obj, path, _OBJECT_FIELDS)
+        self.mapping(obj, path, _OBJECT_FIELDS, optional=("vertices",))
         name = self.string(obj["name"], f"{path}.name")
-        shape = self.string(obj["shape"], f"{path}.shape", SHAPE_SIZES)
-        self.vector(obj["size"], f"{path}.size", SHAPE_SIZES[shape], low=0.0, open_ends="low")
+        shape = self.string(obj["shape"], f"{path}.shape", [*SHAPE_SIZES, CONVEX])
+        vertices = ()
+        if shape == CONVEX:
+            points = obj.get("vertices")
+            if not isinstance(points, list) or len(points) < 4:
+                self.fail(f"{path}.vertices", f"must be 4 or more points, got {_show(points)}")
+            vertices = tuple(
+                tuple(self.vector(p, f"{path}.vertices[{i}]", 3)) for i, p in enumerate(points)
+            )
+            self.vector(obj["size"], f"{path}.size", 0)  # a convex object has no size
+        else:
+            self.vector(obj["size"], f"{path}.size", SHAPE_SIZES[shape], low=0.0, open_ends="low")
         self.vector(obj["position"], f"{path}.position", 3)
         self.vector(obj["orientation"], f"{path}.orientation", 4)
         try:
@@ -272,7 +303,7 @@ class _Schema:
         except (ValueError, RuntimeError) as e:  # a zero (or overflowing) quaternion
             self.fail(f"{path}.orientation", f"must be a rotation [x, y, z, w]: {e}")
         try:
-            validate_object(name, shape, obj["size"], X_PO)
+            validate_object(name, shape, obj["size"], X_PO, vertices)
         except ValueError as e:
             self.fail(path, f"is not a valid object: {e}")
 

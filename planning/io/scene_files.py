@@ -8,16 +8,21 @@ Our format (``config/pickplace.yaml``; world frame, metres, box centres)::
     place:    {position: [x, y, z]}
     objects:  # more objects, any shape: size as in scene_objects.SHAPE_SIZES
       - {name: can, shape: cylinder, size: [radius, length], position: [...],
-         orientation: [x, y, z, w]}
+         orientation: [x, y, z, w], color: [r, g, b, a]}
+      - {name: hull, shape: convex, vertices: [[x, y, z], ...], position: [...]}
     attached: # held objects, pose in the hand's attachment frame A (same keys as objects)
+
+A convex object is the convex hull of its ``vertices`` (in its frame, m) and has no size;
+``color`` (optional, in [0, 1]) is for display.
 
 Loading replaces the whole scene: world objects (the table too), held objects, allowed
 collisions (back to the robot's own) and the place target. An empty file (blank, or comments
 only) is an error; ``{}`` is an explicitly empty scene.
 
 MoveIt's scene files (PlanningScene YAML and the text ``.scene`` format) are read by
-``planning.io.moveit_scene``; ``load_moveit_scene``, ``parse_moveit_objects`` and
-``parse_allowed_collisions`` are importable from here too.
+``planning.io.moveit_scene``; ``load_moveit_scene`` (which returns a ``MoveItScene``: the start
+configuration, the warnings), ``parse_moveit_objects`` and ``parse_allowed_collisions`` are
+importable from here too.
 """
 
 import dataclasses as dc
@@ -30,6 +35,7 @@ from drake_sim.base.config import load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
 from planning.io.moveit_scene import (
+    MoveItScene,
     load_moveit_scene,
     parse_allowed_collisions,
     parse_moveit_objects,
@@ -38,6 +44,7 @@ from planning.scene_objects import SceneObject, make_pose
 
 __all__ = [
     "BoxSpec",
+    "MoveItScene",
     "ObjectSpec",
     "PlaceSpec",
     "SceneFile",
@@ -67,10 +74,12 @@ class PlaceSpec:
 @dc.dataclass
 class ObjectSpec:
     name: str = ""
-    shape: str = "box"  # box, cylinder or sphere
+    shape: str = "box"  # box, cylinder, sphere or convex
     size: list[float] = dc.field(default_factory=list)  # m, see scene_objects.SHAPE_SIZES
     position: list[float] = dc.field(default_factory=list)  # m
     orientation: list[float] = dc.field(default_factory=lambda: [0.0, 0.0, 0.0, 1.0])  # x,y,z,w
+    vertices: list[list[float]] = dc.field(default_factory=list)  # m, a convex object's points
+    color: list[float] = dc.field(default_factory=list)  # r, g, b, a in [0, 1]; [] for none
 
 
 @dc.dataclass
@@ -166,18 +175,23 @@ def _box_object(name: str, box: BoxSpec) -> SceneObject:
 
 def _spec_object(spec: ObjectSpec) -> SceneObject:
     X = make_pose(spec.position, spec.orientation, name=f"object {spec.name!r}")
-    return SceneObject(spec.name, spec.shape, tuple(spec.size), X)
+    color = tuple(spec.color) if spec.color else None
+    vertices = tuple(map(tuple, spec.vertices))
+    return SceneObject(spec.name, spec.shape, tuple(spec.size), X, vertices, color)
 
 
 def _object_entry(obj: SceneObject) -> dict:
     q = obj.X_PO.rotation().ToQuaternion()
-    return {
-        "name": obj.name,
-        "shape": obj.shape,
-        "size": list(obj.size),
-        "position": obj.X_PO.translation().tolist(),
-        "orientation": [q.x(), q.y(), q.z(), q.w()],
-    }
+    entry = {"name": obj.name, "shape": obj.shape}
+    if obj.vertices:
+        entry["vertices"] = [list(p) for p in obj.vertices]
+    else:
+        entry["size"] = list(obj.size)
+    entry["position"] = obj.X_PO.translation().tolist()
+    entry["orientation"] = [q.x(), q.y(), q.z(), q.w()]
+    if obj.color is not None:
+        entry["color"] = list(obj.color)
+    return entry
 
 
 def _yaw_only(obj: SceneObject) -> float | None:

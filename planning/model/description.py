@@ -11,6 +11,17 @@ A description YAML names the files MoveIt would load for a robot::
     joint_limits: config/joint_limits.yaml               # optional: MoveIt's limits
     xacro_args: {name: ur5}              # optional: $(arg name) values
 
+and, for planning here (MoveIt keeps these in other files or in code; all optional)::
+
+    ee_frame: tool0                      # the frame RobotState reports and pose goals target
+                                         # (default: the group's first tip link)
+    attach_link: wrist_3_link            # where held objects hang (default: the tip link);
+                                         # they are not checked against it or the links below it
+    named_states: {home: [0, -1.57, 0, -1.57, 0, 0]}    # more named states of the group, over
+                                         # its joints in MoveIt's order (replacing the SRDF's)
+    default_positions: {finger_joint: 0.04}   # positions of joints outside the group (default:
+                                         # 0, or the limit nearest to 0)
+
 Paths and package folders are relative to the YAML file; URIs (``package://``, ``$(find ...)``)
 stay as written, for ``planning.model.robot_files`` to resolve (a package's folder may be one:
 ``{ur_description: package://example-robot-data/robots/ur_description}``). A file or folder
@@ -42,7 +53,18 @@ from planning.model.srdf import default_group, load_srdf
 from planning.model.xacro_files import xacro_value
 
 _log = logging.getLogger(__name__)
-_KEYS = ("urdf", "srdf", "package_paths", "group", "joint_limits", "xacro_args")
+_KEYS = (
+    "urdf",
+    "srdf",
+    "package_paths",
+    "group",
+    "joint_limits",
+    "xacro_args",
+    "ee_frame",
+    "attach_link",
+    "named_states",
+    "default_positions",
+)
 
 
 @dataclass
@@ -57,6 +79,10 @@ class RobotDescription:
         joint_limits: MoveIt's ``joint_limits.yaml`` (path or URI); "" for none.
         xacro_args: ``$(arg name)`` values for the URDF's and the SRDF's xacro.
         source: the description YAML or MoveIt config folder this came from.
+        ee_frame: the end-effector frame ("": the group's first tip link).
+        attach_link: the link held objects hang on ("": the group's first tip link).
+        named_states: more named states of the group, name -> positions over its joints.
+        default_positions: joint name -> position for joints outside the group.
     """
 
     urdf: str
@@ -66,6 +92,10 @@ class RobotDescription:
     joint_limits: str = ""
     xacro_args: dict[str, str] = field(default_factory=dict)
     source: str = ""
+    ee_frame: str = ""
+    attach_link: str = ""
+    named_states: dict[str, list[float]] = field(default_factory=dict)
+    default_positions: dict[str, float] = field(default_factory=dict)
 
 
 def load_robot_description(
@@ -110,6 +140,10 @@ def load_robot_description(
         joint_limits=_file(_text(data, "joint_limits", where, ""), base, "joint_limits", where),
         xacro_args=_xacro_args(_mapping(data, "xacro_args", where), where),
         source=where,
+        ee_frame=_text(data, "ee_frame", where, ""),
+        attach_link=_text(data, "attach_link", where, ""),
+        named_states=_named_states(_mapping(data, "named_states", where), where),
+        default_positions=_positions(_mapping(data, "default_positions", where), where),
     )
 
 
@@ -224,6 +258,28 @@ def _xacro_args(values: dict, where: str) -> dict[str, str]:
         if not isinstance(value, (str, int, float, bool)):
             raise ConfigError(f"{where}: xacro_args.{key} must be a scalar, got {value!r}")
     return {str(key): xacro_value(value) for key, value in values.items()}
+
+
+def _named_states(values: dict, where: str) -> dict[str, list[float]]:
+    states = {}
+    for name, q in values.items():
+        if not isinstance(q, list) or not all(_is_number(v) for v in q):
+            raise ConfigError(f"{where}: named_states.{name} must be a list of numbers, got {q!r}")
+        states[str(name)] = [float(v) for v in q]
+    return states
+
+
+def _positions(values: dict, where: str) -> dict[str, float]:
+    for name, value in values.items():
+        if not _is_number(value):
+            raise ConfigError(f"{where}: default_positions.{name} must be a number, got {value!r}")
+    return {str(name): float(value) for name, value in values.items()}
+
+
+def _is_number(value) -> bool:
+    import math
+
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _file(value: str, base: Path, key: str, where: str) -> str:

@@ -1,16 +1,15 @@
-"""How the Panda is loaded for planning, and the table a new scene starts with.
+"""How the robot is loaded for planning, and the table a new scene starts with.
 
 The ``model`` and ``table`` sections of ``planning.config.PandaPlanningConfig`` (the ``robot``
 section of the pick-and-place scenario), kept with the model that reads them
-(``planning.model.panda``). Every field has a default; joint positions in rad (arm) and m
-(fingers), lengths in m. No ``from __future__ import annotations``: the YAML loader reads the
-field types at run time.
+(``planning.model.planning_model``). The robot is a description (``description``: the Panda by
+default); what is robot-specific (frames, named states, finger positions) comes from it, and
+the fields here only change it. Every field has a default; joint positions in rad or m, lengths
+in m. No ``from __future__ import annotations``: the YAML loader reads the field types at run
+time.
 """
 
 import dataclasses as dc
-import math
-
-from planning.model.layout import FINGER_OPEN, READY_Q
 
 
 @dc.dataclass
@@ -23,33 +22,29 @@ class TableConfig:
 
 @dc.dataclass
 class PandaModelConfig:
-    """How the Panda is loaded for planning."""
+    """How the robot is loaded for planning."""
 
-    # "convex_mesh" (the URDF's STL collision meshes, declared convex) or "primitives" (the
-    # spheres and cylinders of example-robot-data's panda_collision.urdf).
+    # The robot: a shipped robot's name (config/robots/<name>.yaml: panda, ur5, fetch, baxter),
+    # a robot description YAML or a *_moveit_config folder (planning.model.description).
+    description: str = "panda"
+    # The planning group; "" for the description's.
+    group: str = ""
+    # "convex_mesh" (the URDF's collision meshes, checked as their convex hulls) or, for the
+    # Panda only, "primitives" (the spheres and cylinders of example-robot-data's
+    # panda_collision.urdf).
     collision_geometry: str = "convex_mesh"
-    # Frame whose pose RobotState reports and IK targets: the tool centre point between the
-    # fingertips, 0.1034 m beyond the hand's flange side along its z axis (MoveIt's end effector).
-    ee_frame: str = "panda_hand_tcp"
-    # Default opening of each finger, m from the centre (0 closed, 0.04 fully open).
-    finger_position: float = FINGER_OPEN
-    # Named arm configurations, rad, 7 joints each; the SRDF's group_state entries are added
-    # (a name here wins over the SRDF).
-    named_configurations: dict[str, list[float]] = dc.field(
-        default_factory=lambda: {
-            "ready": list(READY_Q),  # franka "ready"
-            "extended": [0.0, 0.6, 0.0, -0.9, 0.0, 1.5, math.pi / 4],  # reaching forward
-            "transport": [0.0, -0.9, 0.0, -2.8, 0.0, 1.9, math.pi / 4],  # folded, hand up close
-        }
-    )
-    # Link pairs never checked against each other, in addition to the SRDF's disabled pairs.
-    # The hand-held object's body and the fingers never collide with what the fingers hold.
-    extra_disabled_collisions: list[list[str]] = dc.field(
-        default_factory=lambda: [
-            ["panda_attachment", "panda_leftfinger"],
-            ["panda_attachment", "panda_rightfinger"],
-        ]
-    )
+    # Frame whose pose RobotState reports and IK targets; "" for the description's (the Panda's
+    # is the tool centre point between the fingertips, MoveIt's end effector).
+    ee_frame: str = ""
+    # Each finger's position (m, the joints below the attach link); None for the description's
+    # default positions (the Panda's: 0.04, fully open).
+    finger_position: float | None = None
+    # More named configurations of the group (rad or m, one value per joint of the group);
+    # they replace the description's of the same name.
+    named_configurations: dict[str, list[float]] = dc.field(default_factory=dict)
+    # Link pairs never checked against each other, in addition to the SRDF's disabled pairs
+    # (held objects are never checked against the attach link and the links below it).
+    extra_disabled_collisions: list[list[str]] = dc.field(default_factory=list)
     # Joint-space step for edge collision checks, rad.
     edge_step_size: float = 0.05
     # Padding added to robot-environment and robot-robot distances, m.

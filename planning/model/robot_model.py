@@ -12,7 +12,11 @@ MoveIt's order:
 * velocity limits: the URDF's, replaced by ``joint_limits.yaml``'s where it sets them;
 * acceleration and jerk limits: ``joint_limits.yaml``'s; ``inf`` where nothing bounds them (a
   URDF has none);
-* the group's named states (SRDF ``group_state``), as arrays in the group's joint order.
+* the group's named states (SRDF ``group_state``, then the description's ``named_states``,
+  which replace states of the same name), as arrays in the group's joint order;
+* the end-effector frame and the link held objects hang on (the description's, else the group's
+  first tip link), and the positions of the joints outside the group (the description's
+  ``default_positions``, else 0 moved into the joint's limits).
 
 ``RobotModel.add_to(plant)`` parses the Drake-ready URDF (``robot_files.drake_urdf``: meshes
 converted once into the cache) and welds the root link to the world. MoveIt fixes the root with
@@ -68,6 +72,9 @@ class RobotModel:
             its subgroups, else the tips of its chains, else the last links of its joints
             (two for a two-arm group).
         disabled_pairs: link pairs whose collisions are never checked (SRDF).
+        ee_frame: the frame pose goals and ``RobotState`` use (a link of the URDF).
+        attach_link: the link held objects hang on.
+        default_positions: joint name -> position of every moving joint outside the group.
         urdf_text: the URDF as read (xacro rendered).
     """
 
@@ -86,6 +93,9 @@ class RobotModel:
     named_states: dict[str, np.ndarray]
     tip_links: list[str]
     disabled_pairs: list[tuple[str, str]]
+    ee_frame: str = ""
+    attach_link: str = ""
+    default_positions: dict[str, float] = field(default_factory=dict)
     urdf_text: str = field(default="", repr=False)
 
     @property
@@ -177,6 +187,20 @@ def load_robot_model(
     if description.joint_limits:
         path = robot_files.resolve_uri(description.joint_limits, base, packages)
         _apply_joint_limits(limits, names, load_joint_limits(path), tree, str(path))
+    tips = _tip_links(srdf, group, tree, names)
+    where = description.source or "robot description"
+    for key in ("ee_frame", "attach_link"):
+        link = getattr(description, key)
+        if link and link not in tree.links:
+            raise ConfigError(f"{where}: {key}: the URDF has no link {link!r}")
+    named = _named_states(srdf, group, names, limits)
+    for state, q in description.named_states.items():
+        if len(q) != len(names):
+            raise ConfigError(
+                f"{where}: named_states.{state} has {len(q)} values, group {group!r} has "
+                f"{len(names)} joints ({', '.join(names)})"
+            )
+        named[state] = np.array(q, dtype=float)
     return RobotModel(
         name=tree.robot_name,
         description=description,
@@ -184,12 +208,42 @@ def load_robot_model(
         tree=tree,
         group=group,
         joint_names=names,
-        named_states=_named_states(srdf, group, names, limits),
-        tip_links=_tip_links(srdf, group, tree, names),
+        named_states=named,
+        tip_links=tips,
         disabled_pairs=[(a, b) for a, b, _ in srdf.disabled_collisions],
+        ee_frame=description.ee_frame or tips[0],
+        attach_link=description.attach_link or tips[0],
+        default_positions=_default_positions(tree, names, description, where),
         urdf_text=text,
         **limits,
     )
+
+
+def _default_positions(tree: UrdfTree, names: list[str], description, where: str) -> dict:
+    """Positions of the moving joints outside the group: the description's, else 0 moved into
+    the joint's limits (mimic joints follow their leader in Drake's plant too: kept here)."""
+    moving = [j for j in tree.joints.values() if j.type not in ("fixed", "floating", "planar")]
+    outside = {j.name: j for j in moving if j.name not in names}
+    unknown = [n for n in description.default_positions if n not in outside]
+    if unknown:
+        raise ConfigError(
+            f"{where}: default_positions: {', '.join(unknown)} not moving joints outside the group"
+        )
+    positions = {}
+    for name, joint in outside.items():
+        low = joint.lower if joint.lower is not None and joint.type != "continuous" else -np.inf
+        high = joint.upper if joint.upper is not None and joint.type != "continuous" else np.inf
+        if name in description.default_positions:
+            value = description.default_positions[name]
+            if not low - 1e-9 <= value <= high + 1e-9:
+                raise ConfigError(
+                    f"{where}: default_positions.{name} = {value:g} is outside the joint's "
+                    f"limits [{low:g}, {high:g}]"
+                )
+        else:
+            value = min(max(0.0, low), high)
+        positions[name] = float(value)
+    return positions
 
 
 def _limits(tree: UrdfTree, names: list[str]) -> dict[str, np.ndarray]:

@@ -27,7 +27,6 @@ import time
 import numpy as np
 
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
-from planning.model.layout import NUM_ARM_JOINTS
 from planning.paths import densify, drop_duplicates, path_length
 
 
@@ -55,7 +54,7 @@ class GcsResult:
 
     Attributes:
         success: true when ``path`` was found and passed the collision check.
-        path: (N, 7) waypoints, rad, whose straight-line interpolation is the checked path;
+        path: (N, n) waypoints, rad, whose straight-line interpolation is the checked path;
             None on failure.
         message: what happened (the colliding bodies when validation failed).
         solve_time: wall time, s.
@@ -103,7 +102,7 @@ class GcsPlanner:
         return list(self._regions)
 
     def plan(self, q_start, q_goal, deadline: float | None = None) -> GcsResult:
-        """Returns a collision-checked path from q_start to q_goal (7 arm joints, rad).
+        """Returns a collision-checked path from q_start to q_goal (the group's joints, rad).
 
         Args:
             q_start, q_goal: collision-free configurations, rad.
@@ -112,7 +111,7 @@ class GcsPlanner:
         t0 = time.perf_counter()
         deadline = float("inf") if deadline is None else deadline
         q_start, q_goal = (
-            np.asarray(q, dtype=float).reshape(NUM_ARM_JOINTS) for q in (q_start, q_goal)
+            np.asarray(q, dtype=float).reshape(self._scene.num_joints) for q in (q_start, q_goal)
         )
 
         def fail(message: str, repairs: int = 0) -> GcsResult:
@@ -151,7 +150,7 @@ class GcsPlanner:
         to q by a collision-free straight edge, else None."""
         if any(r.PointInSet(q, 1e-9) for r in self._regions):
             return q
-        found = [r.Projection(q.reshape(NUM_ARM_JOINTS, 1)) for r in self._regions]
+        found = [r.Projection(q.reshape(-1, 1)) for r in self._regions]
         distances = [np.inf if f is None else f[0][0] for f in found]
         for i in np.argsort(distances)[: self._options.connect_candidates]:
             if not np.isfinite(distances[i]):
@@ -168,7 +167,7 @@ class GcsPlanner:
         from pydrake.planning import GcsTrajectoryOptimization
 
         opts = self._options
-        gcs = GcsTrajectoryOptimization(NUM_ARM_JOINTS)
+        gcs = GcsTrajectoryOptimization(self._scene.num_joints)
         main = gcs.AddRegions(self._regions, opts.order)
         source = gcs.AddRegions([Point(q_a)], 0)
         target = gcs.AddRegions([Point(q_b)], 0)

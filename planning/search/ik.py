@@ -33,9 +33,9 @@ from pydrake.solvers import Solve
 from planning.collision.sphere_kernel import announce_compile
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
-from planning.model.layout import NUM_ARM_JOINTS
 from planning.search import pose_kernel
 from planning.search.cartesian import PoseNewton
+from planning.search.reach import reach_bound
 
 _REACH_MARGIN = 0.02  # m added to the computed reach bound
 _POSITION_COST = 1e3  # 1/m^2, weight of the squared position error (joint cost: 1e-2/rad^2)
@@ -74,9 +74,7 @@ class IkSolver:
         self._checker_context = scene.checker.MakeStandaloneModelContext()
         plant = scene.plant
         self._context = plant.CreateDefaultContext()
-        arm = scene.model.arm_indices
-        self._lower = plant.GetPositionLowerLimits()[arm]
-        self._upper = plant.GetPositionUpperLimits()[arm]
+        self._lower, self._upper = scene.lower, scene.upper
         self._newtons: dict[int, PoseNewton] = {}  # by frame index
 
     def solve(
@@ -91,10 +89,10 @@ class IkSolver:
         """Finds arm joints placing frame E at ``p_WE`` and/or orientation ``R_WE``.
 
         Args:
-            frame_name: the Panda frame E to place (e.g. "panda_hand_tcp").
+            frame_name: the robot's frame E to place (e.g. "panda_hand_tcp").
             p_WE: target position of E's origin in W, m; None leaves it free.
             R_WE: target orientation of E in W; None leaves it free.
-            q_seed: the first attempt's start (7 or 9 values); the scene's "ready" when None.
+            q_seed: the first attempt's start (group or full q); the model's ``home`` when None.
             options: tolerances, restarts, time budget and seed.
 
         Raises:
@@ -109,7 +107,9 @@ class IkSolver:
                 ErrorCode.INVALID_GOAL, "IK needs a position, an orientation or both"
             )
         if not plant.HasFrameNamed(frame_name, scene.model.instance):
-            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the Panda has no frame {frame_name!r}")
+            raise PlanningError(
+                ErrorCode.FRAME_NOT_FOUND, f"{scene.model.robot.name} has no frame {frame_name!r}"
+            )
         frame = plant.GetFrameByName(frame_name, scene.model.instance)
         if p_WE is not None:
             p_WE = np.asarray(p_WE, dtype=float).reshape(-1)
@@ -120,9 +120,7 @@ class IkSolver:
             self._check_reach(frame, p_WE)
         if R_WE is not None and not np.all(np.isfinite(R_WE.matrix())):
             raise PlanningError(ErrorCode.INVALID_GOAL, "target orientation is not finite")
-        q_seed = scene.arm_q(
-            scene.model.named_configurations["ready"] if q_seed is None else q_seed
-        )
+        q_seed = scene.arm_q(scene.model.home if q_seed is None else q_seed)
 
         ik, q_vars = self._make_program(frame, p_WE, R_WE, options)
         newton = self.newton(frame)
@@ -188,10 +186,11 @@ class IkSolver:
                 world, R_WE, frame, RotationMatrix(), options.orientation_tolerance
             )
             ik.AddOrientationCost(world, R_WE, frame, RotationMatrix(), _ORIENTATION_COST)
-        arm, fingers = scene.model.arm_indices, scene.model.finger_indices
-        prog.AddBoundingBoxConstraint(self._lower, self._upper, q_vars[arm])
-        f = scene.finger_positions
-        prog.AddBoundingBoxConstraint(f, f, q_vars[fingers])
+        group, others = scene.model.group_indices, scene.model.other_indices
+        prog.AddBoundingBoxConstraint(self._lower, self._upper, q_vars[group])
+        if len(others):
+            f = scene.other_positions
+            prog.AddBoundingBoxConstraint(f, f, q_vars[others])
         if options.minimum_distance is not None:
             constraint = MinimumDistanceLowerBoundConstraint(
                 scene.checker,
@@ -207,8 +206,8 @@ class IkSolver:
         return ik, q_vars
 
     def _program_accepts(self, ik, q) -> bool:
-        """True when the arm joints q (7,) satisfy every constraint of the program (joint
-        limits, fingers, pose, minimum distance)."""
+        """True when the group's joints q satisfy every constraint of the program (joint
+        limits, the other joints, pose, minimum distance)."""
         return bool(ik.prog().CheckSatisfied(ik.prog().GetAllConstraints(), self._scene.full_q(q)))
 
     def _set_nominal(self, ik, q_full) -> None:
@@ -225,26 +224,13 @@ class IkSolver:
     def _check_reach(self, frame, p_WE) -> None:
         """Raises NO_IK_SOLUTION at once when p_WE is beyond a conservative reach bound."""
         scene, plant = self._scene, self._scene.plant
-        plant.SetPositions(self._context, scene.full_q(np.zeros(NUM_ARM_JOINTS)))
-        names = ["panda_link2", "panda_link4", "panda_link6", "panda_link7"]
-        p = [
-            plant.GetFrameByName(n, scene.model.instance)
-            .CalcPoseInWorld(self._context)
-            .translation()
-            for n in names
-        ]
-        p_E = frame.CalcPoseInWorld(self._context).translation()
-        reach = (
-            np.linalg.norm(p[1] - p[0])
-            + np.linalg.norm(p[2] - p[1])
-            + np.linalg.norm(p[3] - p[2])
-            + np.linalg.norm(p_E - p[3])
-        )
-        distance = np.linalg.norm(p_WE - p[0])
+        plant.SetPositions(self._context, scene.full_q(np.zeros(scene.num_joints)))
+        p_WA, reach = reach_bound(plant, self._context, frame)
+        distance = np.linalg.norm(p_WE - p_WA)
         if distance > reach + _REACH_MARGIN:
             raise PlanningError(
                 ErrorCode.NO_IK_SOLUTION,
-                f"target {np.round(p_WE, 3).tolist()} is {distance:.3f} m from the shoulder, "
+                f"target {np.round(p_WE, 3).tolist()} is {distance:.3f} m from the first joint, "
                 f"beyond the reach of {frame.name()} ({reach:.3f} m)",
             )
 

@@ -100,7 +100,7 @@ def region_key(scene, seeds, options: RegionOptions) -> str:
     data = {
         "format": _FORMAT,
         "scene": describe_scene(scene),
-        "fingers": np.round(scene.finger_positions, 9).tolist(),
+        "fingers": np.round(scene.other_positions, 9).tolist(),
         "model": dc.asdict(scene.config.model),
         "seeds": np.round(np.asarray(seeds, dtype=float), 6).tolist(),
         "options": dc.asdict(options),
@@ -174,11 +174,11 @@ class _Grower:
 
         self._scene, self._options, self._progress = scene, options, progress
         self._adapter = CheckerAdapter(scene)
-        x = [Variable(f"q{i}") for i in range(7)]
+        x = [Variable(f"q{i}") for i in range(scene.num_joints)]
         full = [Expression(0.0)] * scene.plant.num_positions()
         for k, i in enumerate(scene.model.arm_indices):
             full[i] = Expression(x[k])
-        for f, i in zip(scene.finger_positions, scene.model.finger_indices, strict=True):
+        for f, i in zip(scene.other_positions, scene.model.other_indices, strict=True):
             full[i] = Expression(float(f))
         self._iris = IrisZoOptions()
         self._iris.parameterization = IrisParameterizationFunction(np.array(full), np.array(x))
@@ -247,8 +247,9 @@ class _Grower:
 
 def _check_seeds(scene, seeds) -> np.ndarray:
     seeds = np.atleast_2d(np.asarray(seeds, dtype=float))
-    if seeds.ndim != 2 or seeds.shape[1] != 7 or len(seeds) == 0:
-        raise ValueError(f"seeds must be (n, 7) arm configurations, got shape {seeds.shape}")
+    n = scene.num_joints
+    if seeds.ndim != 2 or seeds.shape[1] != n or len(seeds) == 0:
+        raise ValueError(f"seeds must be (k, {n}) configurations, got shape {seeds.shape}")
     for i, q in enumerate(seeds):
         if not np.all(np.isfinite(q)) or not scene.in_joint_limits(q, tolerance=1e-9):
             raise ValueError(f"seed {i} {np.round(q, 4).tolist()} is out of the joint limits")

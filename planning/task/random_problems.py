@@ -50,6 +50,39 @@ PANDA_WORKSPACE = Workspace(
 )
 """The Panda: 85.5 cm reach from the shoulder, link0 and link1 within 0.2 m of the z axis."""
 
+_TUNED = {"panda": PANDA_WORKSPACE}
+"""Workspaces measured for a robot (by its URDF name); others are derived (``workspace_of``)."""
+
+
+def workspace_of(scene) -> Workspace:
+    """The workspace of the scene's robot: the tuned one when there is one (the Panda's), else
+    derived from its model: the ball around the end-effector chain's first joint whose radius is
+    the chain's reach bound (``planning.search.reach``), obstacles 0.2 m clear of the vertical
+    axis through the root and at most 0.3 m below it."""
+    model = scene.model
+    tuned = _TUNED.get(model.robot.name)
+    if tuned is not None and model.robot.group in ("arm", tuned.group):
+        return tuned
+    from planning.search.reach import reach_bound
+
+    plant = scene.plant
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(
+        context, scene.full_q(np.clip(np.zeros(model.num_joints), scene.lower, scene.upper))
+    )
+    frame = plant.GetFrameByName(model.ee_frame, model.instance)
+    shoulder, reach = reach_bound(plant, context, frame)
+    root = model.robot.root_link
+    at = plant.world_frame() if root == "world" else plant.GetFrameByName(root, model.instance)
+    base = at.CalcPoseInWorld(context).translation()
+    return Workspace(
+        group=model.robot.group,
+        shoulder=tuple(float(v) for v in shoulder),
+        reach=float(reach),
+        base_radius=0.2,
+        floor=float(base[2] - 0.3),
+    )
+
 
 @dc.dataclass(frozen=True)
 class RandomProblemOptions:
@@ -143,8 +176,7 @@ def make_problem(
         ProblemGenerationError: no scene of the ``scene_draws`` had a valid start and goal.
     """
     model = scene.model
-    lower = scene.plant.GetPositionLowerLimits()[model.arm_indices]
-    upper = scene.plant.GetPositionUpperLimits()[model.arm_indices]
+    lower, upper = scene.lower, scene.upper
     for _ in range(options.scene_draws):
         objects = tuple(random_obstacles(rng, workspace, options))
         scene.replace(world=objects)
@@ -154,14 +186,14 @@ def make_problem(
         for _ in range(options.configuration_draws):
             goal = _free_configuration(scene, rng, lower, upper, 1)
             if _acceptable(scene, start, goal, options):
-                others = _joint_names(scene, model.finger_indices)
+                others = _joint_names(scene, model.other_indices)
                 return RandomProblem(
                     number,
                     objects,
                     group_joint_names(scene),
                     start,
                     goal,
-                    dict(zip(others, map(float, scene.finger_positions), strict=True)),
+                    dict(zip(others, map(float, scene.other_positions), strict=True)),
                 )
     raise ProblemGenerationError(
         number,

@@ -97,7 +97,7 @@ def blend_knots(waypoints: np.ndarray, tolerance: float) -> tuple[np.ndarray, np
     corner turning by theta strays about h theta / 8 from it).
 
     Returns:
-        (knots (M, 7) rad, mask (M,) true at the original waypoints).
+        (knots (M, n) rad, mask (M,) true at the original waypoints).
     """
     turn = _turns(waypoints)
     lengths = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
@@ -159,9 +159,9 @@ class Timing:
     """The timed trajectory through a path's waypoints (see the module docstring).
 
     Args:
-        waypoints: (N, 7) rad.
-        max_velocity: (7,) rad/s.
-        max_acceleration: (7,) rad/s^2.
+        waypoints: (N, n) rad (or m).
+        max_velocity: (n,) rad/s.
+        max_acceleration: (n,) rad/s^2.
         options: how to time; ``RetimeOptions()`` when None.
     """
 
@@ -199,7 +199,7 @@ class Timing:
         self.stops = stops
 
     def smoothed_paths(self, resolution: float) -> list[tuple[int, int, np.ndarray]]:
-        """Returns ``(i, j, samples)`` per smoothed section: the configurations (M, 7) the
+        """Returns ``(i, j, samples)`` per smoothed section: the configurations (M, n) the
         trajectory passes between waypoints i and j, at most about ``resolution`` rad apart."""
         smooth = [sec for sec in self._sections if isinstance(sec, SmoothSection)]
         pairs = zip(self.smoothed, smooth, strict=True)
@@ -208,7 +208,7 @@ class Timing:
     def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Returns (q rad, v rad/s, a rad/s^2) at time t s (clamped to [0, duration])."""
         if not self._sections or t >= self.duration:
-            return self._q_end.copy(), np.zeros(7), np.zeros(7)
+            return self._q_end.copy(), np.zeros_like(self._q_end), np.zeros_like(self._q_end)
         k = int(np.searchsorted(self._starts, max(t, 0.0), side="right") - 1)
         k = min(max(k, 0), len(self._sections) - 1)
         return self._sections[k].sample(max(t, 0.0) - self._starts[k])

@@ -29,14 +29,15 @@ _SAMPLES_PER_GRID_INTERVAL = 16  # timing samples per TOPP-RA grid interval for 
 
 
 @functools.cache
-def seven_joint_plant():
-    """A 7-revolute-joint chain: TOPP-RA needs a plant, only its joint count matters here."""
+def chain_plant(num_joints: int):
+    """A chain of ``num_joints`` revolute joints: TOPP-RA needs a plant, only its joint count
+    matters here (made once per count)."""
     from pydrake.multibody.plant import MultibodyPlant
     from pydrake.multibody.tree import RevoluteJoint, SpatialInertia
 
     plant = MultibodyPlant(0.0)
     parent = plant.world_body()
-    for i in range(7):
+    for i in range(num_joints):
         body = plant.AddRigidBody(f"link{i}", SpatialInertia.SolidSphereWithMass(1.0, 0.05))
         plant.AddJoint(
             RevoluteJoint(f"joint{i}", parent.body_frame(), body.body_frame(), [0, 0, 1])
@@ -60,7 +61,7 @@ def drake_spline(waypoints: np.ndarray):
 
     knots, first, last = _slopes(waypoints)
     path = PiecewisePolynomial.CubicWithContinuousSecondDerivatives(
-        knots, waypoints.T, first.reshape(7, 1), last.reshape(7, 1)
+        knots, waypoints.T, first.reshape(-1, 1), last.reshape(-1, 1)
     )
     return path, knots
 
@@ -137,7 +138,7 @@ class SmoothSection:
         else:  # Drake's own, should ours find none (not seen)
             from pydrake.multibody.optimization import Toppra
 
-            toppra = Toppra(self._drake_path(), seven_joint_plant(), grid)
+            toppra = Toppra(self._drake_path(), chain_plant(waypoints.shape[1]), grid)
             toppra.AddJointVelocityLimit(-vmax, vmax)
             toppra.AddJointAccelerationLimit(-amax, amax)
             drake_s = toppra.SolvePathParameterization()
@@ -162,7 +163,7 @@ class SmoothSection:
         self.waypoint_times = knot_times * self._stretch
 
     def path_samples(self, resolution: float) -> np.ndarray:
-        """Configurations (M, 7) on the spline at most about ``resolution`` rad apart."""
+        """Configurations (M, n) on the spline at most about ``resolution`` rad apart."""
         chord = self._knots[-1]
         speed = np.max(np.linalg.norm(self._dq(self._knots), axis=1))
         n = max(1, int(np.ceil(chord * max(speed, 1.0) / resolution)))
@@ -201,7 +202,7 @@ class SmoothSection:
 
     def sample(self, t: float):
         if t >= self.duration:
-            return self._q_end.copy(), np.zeros(7), np.zeros(7)
+            return self._q_end.copy(), np.zeros_like(self._q_end), np.zeros_like(self._q_end)
         if self._drake_s is None:
             from pydrake.trajectories import PiecewisePolynomial
 

@@ -14,7 +14,7 @@ import diagrams.panda_station as mut
 from diagrams.pickplace_scenario import load_pickplace_scenario
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
-from planning.model.panda import build_panda_model
+from planning.model.planning_model import build_planning_model
 from planning.scene_objects import free_body_pose, free_body_positions
 
 SCENE = config_dir() / "pickplace.yaml"
@@ -27,13 +27,13 @@ def config():
 
 @pytest.fixture(scope="module")
 def model(config):
-    return build_panda_model(config.model)
+    return build_planning_model(config.model)
 
 
 def _ik(model, p_WG, q_seed):
     """Arm q (9 values, fingers kept from q_seed) putting the TCP at p_WG, pointing down."""
     plant = model.plant
-    tcp = plant.GetFrameByName(model.config.ee_frame)
+    tcp = plant.GetFrameByName(model.ee_frame)
     ik = InverseKinematics(plant, with_joint_limits=True)
     q = ik.q()
     p_WG = np.asarray(p_WG)

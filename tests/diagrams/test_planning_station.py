@@ -12,6 +12,7 @@ import diagrams.planning_station as mut
 from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.scene_boxes import box_pose
 from drake_sim.base.errors import ConfigError
+from planning.model.planning_model import finger_defaults, named_configurations
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +30,7 @@ def dut(scenario):
 
 def _initial_q(scenario, name: str) -> np.ndarray:
     model = scenario.robot.model
-    return np.array([*model.named_configurations[name], *[model.finger_position] * 2])
+    return np.array([*named_configurations(model)[name], *finger_defaults(model)])
 
 
 def test_mode_argument_overrides_the_scenario(scenario, dut):

@@ -10,25 +10,26 @@ import planning.config as mut
 from drake_sim.base.errors import ConfigError
 from planning.model.layout import FINGER_OPEN, READY_Q
 from planning.model.panda_config import PandaModelConfig
+from planning.model.planning_model import finger_defaults, named_configurations
 
 
 def test_defaults_describe_the_panda_on_its_table():
     dut = mut.PandaPlanningConfig()
     model = dut.model
-    assert model.collision_geometry == "convex_mesh" and model.ee_frame == "panda_hand_tcp"
-    assert model.finger_position == FINGER_OPEN
-    assert model.named_configurations["ready"] == pytest.approx(READY_Q)
-    assert sorted(model.named_configurations) == ["extended", "ready", "transport"]
-    assert all(len(q) == 7 for q in model.named_configurations.values())
-    assert ["panda_attachment", "panda_leftfinger"] in model.extra_disabled_collisions
+    assert model.description == "panda" and model.collision_geometry == "convex_mesh"
+    named = named_configurations(model)
+    assert named["ready"] == pytest.approx(READY_Q)
+    assert sorted(named) == ["extended", "ready", "transport"]
+    assert all(len(q) == 7 for q in named.values())
+    assert finger_defaults(model) == [FINGER_OPEN, FINGER_OPEN]
     assert dut.table.size == [1.2, 1.4, 0.04]
     top = dut.table.position[2] + 0.5 * dut.table.size[2]
     assert top == pytest.approx(0.0)  # the Panda stands on the table top
     assert dut.ik == mut.IkOptions() and dut.ik.seed == 0
     mut.check_panda_config(dut)  # the defaults are valid
     # Each config gets its own lists: changing one leaves the defaults alone.
-    dut.model.named_configurations["ready"][0] = 1.0
-    assert mut.PandaPlanningConfig().model.named_configurations["ready"][0] == READY_Q[0]
+    dut.model.named_configurations["ready"] = [1.0] * 7
+    assert mut.PandaPlanningConfig().model.named_configurations == {}
 
 
 def test_yaml_string_changes_only_its_keys():
@@ -62,7 +63,7 @@ def test_yaml_file_and_a_null_table(tmp_path):
         ("model: {ee_frme: x}", ["model.ee_frme"]),
         ("ik: {max_restarts: many}", ["ik.max_restarts"]),
         ("ik: {time_budget: .inf}", ["ik.time_budget"]),
-        ("model: {named_configurations: {up: [0, 0, 0]}}", ["named_configurations.up", "7"]),
+        ("model: {named_configurations: {up: [0, 0, 0]}}", ["named_configurations.up", "7 joints"]),
         ("model: {extra_disabled_collisions: [[panda_link1]]}", ["extra_disabled_collisions"]),
         ("model: {finger_position: 0.05}", ["model.finger_position"]),
         ("model: {edge_step_size: 0.0}", ["model.edge_step_size"]),
@@ -99,5 +100,5 @@ def test_check_names_where_the_values_came_from():
     with pytest.raises(ConfigError, match="^scenario.yaml: ik"):
         mut.check_panda_config(bad, "scenario.yaml")
     named = dc.replace(PandaModelConfig(), named_configurations={"pi": [math.pi] * 6})
-    with pytest.raises(ConfigError, match="named_configurations.pi has 6 values"):
+    with pytest.raises(ConfigError, match="named_configurations.pi has 6 values, group 'arm'"):
         mut.check_panda_config(mut.PandaPlanningConfig(model=named))

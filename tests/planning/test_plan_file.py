@@ -17,13 +17,13 @@ from tests.plan_file_helpers import field_name, json_type, parent_of, walk
 # Values out of each numeric field's range, by the field's name without indices. Waypoints at
 # 5.85 rad load (the file cannot know the robot) and are refused before motion.
 OUT_OF_RANGE = {
-    "version": [0, 3],
+    "version": [0, 4],
     "waypoints": [5.85, -5.85, 1e6],
     "max_velocity": [-1.0, 0.0],
     "max_acceleration": [-1.0, 0.0],
     "velocity_scaling": [0.0, 1.5],
     "acceleration_scaling": [0.0, 1.5],
-    "finger_positions": [-0.01, 0.05],
+    "finger_positions": [-0.01, 0.05],  # refused before motion: the fingers' limits
     "timing.max_corner_angle": [-0.1, 4.0],
     "timing.path_tolerance": [-0.1],
     "timing.margin": [-0.1, 0.5],

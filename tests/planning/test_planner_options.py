@@ -41,11 +41,8 @@ def test_defaults_are_the_documented_values():
     )
     assert o.pose == mut.PoseGoalOptions(ik_solutions=4)
     assert o.cartesian == mut.CartesianOptions(step=0.005, rotation_step=0.05, jump_threshold=0.2)
-    assert o.timing == mut.TimingOptions(
-        max_velocity=[2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61],
-        max_acceleration=[15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0],
-        velocity_scaling=1.0,
-        acceleration_scaling=1.0,
+    assert o.timing == mut.TimingOptions(  # no limits: the robot's (the Panda's datasheet)
+        max_velocity=[], max_acceleration=[], velocity_scaling=1.0, acceleration_scaling=1.0
     )
     assert o.kto == mut.KtoOptions(enabled=False)
     assert o.spheres == mut.SphereCheckOptions(
@@ -61,8 +58,8 @@ def test_defaults_are_the_documented_values():
 
 def test_sections_are_not_shared_between_instances():
     a, b = mut.MotionPlannerOptions(), mut.MotionPlannerOptions()
-    a.timing.max_velocity[0] = 1.0
-    assert b.timing.max_velocity[0] == 2.175 and b.rrt is not a.rrt
+    a.timing.max_velocity.append(1.0)
+    assert b.timing.max_velocity == [] and b.rrt is not a.rrt
 
 
 def test_nested_yaml_loads_and_keeps_the_other_defaults(tmp_path):
@@ -140,7 +137,7 @@ BAD_VALUES = [
     ("cartesian", "step", 0.0),
     ("cartesian", "rotation_step", 0.0),
     ("cartesian", "jump_threshold", -0.1),
-    ("timing", "max_velocity", [2.0] * 6),
+    ("timing", "max_velocity", [2.0] * 6 + [-1.0]),
     ("timing", "max_acceleration", [10.0] * 6 + [0.0]),
     ("timing", "velocity_scaling", 1.5),
     ("timing", "acceleration_scaling", 0.0),
@@ -230,5 +227,8 @@ def test_planner_without_options_reads_no_file(monkeypatch):
     monkeypatch.setattr(pathlib.Path, "open", spy(pathlib.Path.open))
     monkeypatch.setattr(mut, "load_typed", no_yaml)
     planner = MotionPlanner(scene)
-    assert planner.options == mut.MotionPlannerOptions()
+    robot = scene.model.robot  # the timing limits the planner fills in are the robot's
+    expected = mut.MotionPlannerOptions()
+    expected.timing = expected.timing.with_robot_limits(robot)
+    assert planner.options == expected
     assert not [f for f in opened if f.endswith((".yaml", ".yml"))]

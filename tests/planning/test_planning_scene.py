@@ -23,7 +23,7 @@ def dut(base_scene):
     base_scene.replace(
         [mut.SceneObject("table", "box", table.size, RigidTransform(table.position))]
     )
-    base_scene.finger_positions = base_scene.config.model.finger_position
+    base_scene.other_positions = base_scene.model.default_other
 
 
 @pytest.fixture

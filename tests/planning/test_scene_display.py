@@ -3,6 +3,7 @@ held objects orange at the hand, removed objects deleted; nothing without a Mesh
 Meshcat holds is read back from its ``StaticHtml`` (msgpack commands)."""
 
 import base64
+import dataclasses
 import re
 from types import SimpleNamespace
 
@@ -96,6 +97,22 @@ def test_colours_tell_the_table_world_and_held_objects_apart(published):
     assert len({table, ball, held}) == 3  # ... but the table and held objects differ
     assert table[1] == mut.TABLE_COLOR.a() and ball[1] == pytest.approx(mut.WORLD_COLOR.a())
     assert held[1] == pytest.approx(mut.ATTACHED_COLOR.a())
+
+
+def test_objects_with_a_colour_of_their_own_are_drawn_in_it(scene, meshcat, q):
+    corners = [(x, y, z) for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)]
+    hull = SceneObject("hull", "convex", (), RigidTransform([0.3, -0.4, 0.0]), vertices=corners)
+    scene.add_object(dataclasses.replace(hull, color=(1.0, 0.0, 0.0, 0.5)))
+    scene.attach_new(SceneObject("blue", "sphere", (0.01,), RigidTransform(), color=(0, 0, 1, 1)))
+    try:
+        mut.publish_scene(scene, q)
+        commands = meshcat_commands(meshcat)
+        assert material(commands, f"{mut.PREFIX}/world/hull") == (0xFF0000, 0.5)
+        assert material(commands, f"{mut.PREFIX}/attached/blue") == (0x0000FF, 1.0)
+        assert pose(commands, f"{mut.PREFIX}/world/hull").IsNearlyEqualTo(hull.X_PO, 1e-12)
+    finally:
+        scene.remove_object("hull")
+        scene.remove_object("blue")
 
 
 def test_robot_is_drawn_at_q(scene, published, q):

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from pydrake.geometry import Box, Cylinder, Sphere
+from pydrake.geometry import Box, Convex, Cylinder, Sphere
 from pydrake.math import RigidTransform, RollPitchYaw
 
 import planning.scene_objects as mut
@@ -43,7 +43,7 @@ def test_objects_are_frozen_and_move_by_copy():
     [
         ("", "box", (1, 1, 1), X, ["name", "''"]),
         (7, "box", (1, 1, 1), X, ["name", "7"]),
-        ("c", "cone", (1, 1), X, ["'c'", "cone", "box"]),
+        ("c", "cone", (1, 1), X, ["'c'", "cone", "box", "convex"]),
         ("b", "box", (1, 1), X, ["'b'", "3 size values", "sx, sy, sz", "got 2"]),
         ("s", "sphere", (1, 1), X, ["'s'", "1 size values", "radius"]),
         ("y", "cylinder", (1,), X, ["'y'", "radius, length"]),
@@ -130,3 +130,84 @@ def test_describe_scene_lists_world_and_held_objects():
         "world": [],
         "attached": [],
     }
+
+
+CORNERS = [(x, y, z) for x in (0.0, 0.1) for y in (0.0, 0.2) for z in (0.0, 0.3)]
+
+
+def test_convex_objects_are_the_hull_of_their_vertices():
+    dut = mut.SceneObject("mesh", "convex", (), X, vertices=[list(p) for p in CORNERS])
+    assert dut.vertices == tuple(CORNERS) and dut.size == ()
+    shape = dut.drake_shape()
+    assert isinstance(shape, Convex)
+    hull = shape.GetConvexHull()
+    assert hull.num_vertices() == 8
+    vertices = [hull.vertex(i) for i in range(hull.num_vertices())]
+    points = sorted(tuple(round(float(c), 12) for c in v) for v in vertices)
+    assert points == sorted(CORNERS)
+    flat = mut.SceneObject("flat", "convex", (), X, vertices=[(0, 0, 0), (1, 0, 0), (0, 1, 0)] * 2)
+    assert isinstance(flat.drake_shape(), Convex)  # a polygon is a hull too
+
+
+@pytest.mark.parametrize(
+    "size, vertices, needle",
+    [
+        ((), [(0, 0, 0)] * 3, "at least 4 vertices"),
+        ((), [(0, 0)] * 4, "at least 4 vertices"),
+        ((), [(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0)], "lie on one line"),
+        ((), [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, np.nan)], "not finite"),
+        ((), [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, "x")], "vertices must be"),
+        ((1.0,), CORNERS, "a convex object has no size"),
+    ],
+)
+def test_bad_convex_objects_name_the_object(size, vertices, needle):
+    with pytest.raises(ValueError, match=f"'hull'.*{needle}"):
+        mut.SceneObject("hull", "convex", size, X, vertices=vertices)
+    with pytest.raises(ValueError, match="only a convex object has vertices"):
+        mut.SceneObject("box", "box", (1, 1, 1), X, vertices=CORNERS)
+
+
+def test_colours_and_subframes_travel_with_the_object():
+    tip = RigidTransform([0.0, 0.0, 0.1])
+    dut = mut.SceneObject("crate", "box", (0.1, 0.1, 0.1), X, color=[1, 0.5, 0, 1])
+    dut = dc.replace(dut, subframes=[("tip", tip)])
+    assert dut.color == (1.0, 0.5, 0.0, 1.0) and dut.subframes[0][0] == "tip"
+    moved = dut.with_pose(RigidTransform([1.0, 0.0, 0.0]))
+    assert (moved.color, moved.subframes) == (dut.color, dut.subframes)
+    np.testing.assert_allclose(moved.frame("tip").translation(), [1.0, 0.0, 0.1])
+    assert dut.frame("tip").IsNearlyEqualTo(X @ tip, 1e-12)
+    with pytest.raises(KeyError, match="'crate' has no frame 'top' .its frames: tip"):
+        dut.frame("top")
+    for color in ([1, 0, 0], [2, 0, 0, 1], ["red", 0, 0, 1]):
+        with pytest.raises(ValueError, match="'c': color must be"):
+            mut.SceneObject("c", "sphere", (1,), X, color=color)
+    with pytest.raises(ValueError, match="subframe names must be unique"):
+        mut.SceneObject("s", "sphere", (1,), X, subframes=[("a", tip), ("a", tip)])
+    with pytest.raises(ValueError, match="'s/a': pose must be a RigidTransform"):
+        mut.SceneObject("s", "sphere", (1,), X, subframes=[("a", np.eye(4))])
+
+
+def test_subframe_pose_of_world_and_held_objects():
+    tip = RigidTransform([0.0, 0.0, 0.1])
+    crate = mut.SceneObject("crate", "box", (0.1,) * 3, X, subframes=(("tip", tip),))
+    held = mut.SceneObject("held", "sphere", (0.02,), RigidTransform([0, 0, 0.1]))
+    held = dc.replace(held, subframes=(("tip", tip),))
+    X_WA = RigidTransform([1.0, 2.0, 3.0])
+
+    def object_pose(name, q=None):
+        return crate.X_PO if name == "crate" else X_WA @ held.X_PO
+
+    scene = SimpleNamespace(
+        world_objects={"crate": crate}, attached_objects={"held": held}, object_pose=object_pose
+    )
+    assert mut.subframe_pose(scene, "crate/tip").IsNearlyEqualTo(X @ tip, 1e-12)
+    assert mut.subframe_pose(scene, "crate").IsNearlyEqualTo(X, 1e-12)
+    np.testing.assert_allclose(mut.subframe_pose(scene, "held/tip", q=0).translation(), [1, 2, 3.2])
+
+
+def test_describe_scene_holds_a_convex_objects_vertices():
+    hull = mut.SceneObject("hull", "convex", (), X, vertices=CORNERS)
+    scene = SimpleNamespace(world_objects={"hull": hull}, attached_objects={})
+    (entry,) = mut.describe_scene(scene)["world"]
+    assert entry["shape"] == "convex" and entry["size"] == []
+    assert entry["vertices"] == [list(p) for p in CORNERS]

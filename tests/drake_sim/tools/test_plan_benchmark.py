@@ -13,6 +13,7 @@ from planning import PlanningScene
 from planning.io import mbm
 from tests.cli_helpers import assert_bad_input, run_module
 from tests.mbm_helpers import FakePip, make_problems_archive, make_sdist
+from tests.robot_helpers import dev_resources, vamp_robot
 
 MODULE = "drake_sim.tools.plan_benchmark"
 
@@ -281,3 +282,40 @@ def test_a_random_problem_that_cannot_be_made_is_a_row_saying_so(tmp_path, monke
     assert row["family"] == "random" and row["problem"] == 1
     assert not row["valid"] and not row["success"] and "no start and goal" in row["error"]
     assert not (out / "random").exists()
+
+
+def _robot_set(robot: str):
+    """The robot's MBM set, unpacked from the development copy of the vamp sdist (with its
+    description in the session's cache), or a skip: 65 MB more per robot is not a test's."""
+    vamp_robot(robot)
+    dev = dev_resources()
+    if dev is None or not (dev / robot / "problems.tar.bz2").is_file():
+        pytest.skip(f"no development copy of the {robot} MotionBenchMaker set")
+    return mbm.problems_folder(dev / robot)
+
+
+def test_another_robot_plans_its_own_set_and_its_paths_hold_under_drake(tmp_path):
+    folder = _robot_set("ur5")
+    report = tmp_path / "ur5.json"
+    args = ["--robot", "ur5", "--dataset", str(folder), "--families", "box_ur5", "--limit", "1"]
+    assert mut.main([*args, "--report", str(report)]) == 0
+    (row,) = json.loads(report.read_text())
+    names = [f"{j}_joint" for j in ("shoulder_pan", "shoulder_lift", "elbow")]
+    assert row["joint_names"][:3] == names and len(row["joint_names"]) == 6
+    assert row["valid"] and row["success"] and row["path_valid_fine"]
+    path = np.asarray(row["path"])
+    assert path.shape[1] == 6
+    scene = PlanningScene(mut.robot_config("ur5"))
+    scene.load_moveit(folder / "box_ur5/scene0001.yaml")
+    start, goal, others = mbm.read_request(folder / "box_ur5/request0001.yaml", row["joint_names"])
+    scene.set_positions(others)
+    np.testing.assert_allclose(path[0], start)
+    np.testing.assert_allclose(path[-1], goal)
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        n = int(np.ceil(np.linalg.norm(b - a) / 0.01))
+        assert all(scene.is_collision_free(a + s * (b - a)) for s in np.linspace(0, 1, n + 1))
+
+
+def test_a_robot_without_a_shipped_set_needs_its_problems(capsys):
+    assert mut.main(["--robot", "config/robots/panda_primitives.yaml"]) == 2
+    assert "--dataset" in capsys.readouterr().err

@@ -128,7 +128,7 @@ def test_objects_added_removed_and_attached_at_run_time_are_seen(scene, dut):
     try:
         assert not np.allclose(dut.sphere_centres(q[None])[0], before)
     finally:
-        scene.finger_positions = scene.config.model.finger_position
+        scene.other_positions = scene.model.default_other
 
 
 def test_objects_stay_alive_while_the_model_names_them(scene, dut):

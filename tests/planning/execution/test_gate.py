@@ -14,10 +14,13 @@ from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.planning_station import make_planning_station
 from planning import ErrorCode, Plan, PlanningError, PlanningScene
 from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, READY_Q
+from planning.model.panda_config import PandaModelConfig
+from planning.model.planning_model import robot_model
 from planning.planner_options import TimingOptions
 from planning.task.pick_place import PickPlaceTask
 
-LIMITS = TimingOptions()  # the Panda's datasheet limits
+# The Panda's datasheet limits (its description's joint_limits.yaml).
+LIMITS = TimingOptions().with_robot_limits(robot_model(PandaModelConfig()))
 V_MAX = np.array(LIMITS.max_velocity)
 A_MAX = np.array(LIMITS.max_acceleration)
 READY = np.array(READY_Q)
@@ -124,7 +127,7 @@ def test_closed_finger_plan_is_checked_with_the_open_fingers_measured(mpi):
     np.testing.assert_array_equal(plan.finger_positions, [FINGER_CLOSED] * 2)
     plan.validate(scene)  # free with the fingers it was planned with: the old check passed it
     message = refuse(mpi, plan)
-    assert "with the fingers as measured (0.0400, 0.0400 m)" in message
+    assert "with the fingers as measured (0.0400, 0.0400)" in message
     assert "panda_leftfinger <-> small_box" in message
 
 
@@ -219,7 +222,7 @@ def test_the_first_violation_is_named(scene):
 @pytest.mark.parametrize(
     "change,expected",
     [
-        (lambda p: p.robot.update(joints=["a"] * 7), "the plan is for the joints"),
+        (lambda p: p.robot.update(joints=["a"] * 7), "the plan is for panda group arm (a, a,"),
         (lambda p: setattr(p, "finger_positions", np.zeros(3)), "finger_positions has shape"),
         (lambda p: p.waypoints.__setitem__((1, 4), np.inf), "waypoints[1][4] is inf"),
     ],

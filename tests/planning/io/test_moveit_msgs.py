@@ -1,5 +1,6 @@
-"""MoveIt's message schemas and the readers of numbers, vectors, poses, primitives and
-operations: every value in its MoveIt forms, and errors naming the key path."""
+"""MoveIt's message schemas and the readers of numbers, vectors, poses, primitives, colours and
+operations: every value in its MoveIt forms (ROS 2's printed bytes too), and errors naming the
+key path."""
 
 import math
 
@@ -55,11 +56,15 @@ def test_primitives():
     assert mut.primitive({"type": "SPHERE", "dimensions": [0.5]}, "s") == ("sphere", (0.5,))
     # A cylinder's [height, radius] becomes our (radius, length).
     assert mut.primitive({"type": 3, "dimensions": [2, 0.5]}, "s") == ("cylinder", (0.5, 2.0))
+    # A cone's [height, radius] too; a prism's [height] (its polygon is read elsewhere).
+    assert mut.primitive({"type": 4, "dimensions": [2, 0.5]}, "s") == ("cone", (0.5, 2.0))
+    assert mut.primitive({"type": "prism", "dimensions": [0.3]}, "s") == ("prism", (0.3,))
+    assert mut.primitive({"type": "b'\\x01'", "dimensions": [1, 1, 1]}, "s")[0] == "box"
     for bad, needle in [
-        ({"type": 4, "dimensions": [1, 1]}, "s.type: 'cone' is not supported"),
-        ({"type": 5}, "'prism' is not supported"),
-        ({"dimensions": [1]}, "s.type: 0 is not supported"),
-        ({"type": True, "dimensions": [1]}, "'true' is not supported"),
+        ({"type": 5}, r"s.dimensions: a prism needs \[height\]"),
+        ({"dimensions": [1]}, "s.type: unknown primitive type 0"),
+        ({"type": 9, "dimensions": [1]}, "unknown primitive type 9 .known: 1 box"),
+        ({"type": True, "dimensions": [1]}, "unknown primitive type 'true'"),
         ({"type": "box", "dimensions": [1, 1]}, r"s.dimensions: a box needs \[x, y, z\]"),
         ({"type": "sphere", "dimensions": [0]}, r"s.dimensions\[0\] must be positive"),
         ({"type": "sphere", "dimensions": [True]}, r"s.dimensions\[0\] must be a number"),
@@ -71,9 +76,22 @@ def test_primitives():
 def test_operations():
     for value, name in [(0, "ADD"), (1, "REMOVE"), (2, "APPEND"), (3, "MOVE"), ("move", "MOVE")]:
         assert mut.operation(value, "o") == name
-    for bad in (4, -1, True, "DELETE"):
+    # ros2 topic echo prints a byte field as Python's bytes: b'\x00', b'\x03'.
+    assert mut.operation("b'\\x00'", "o") == "ADD" and mut.operation("b'\\x03'", "o") == "MOVE"
+    assert mut.byte("b'a'") == 97 and mut.byte("plain") == "plain" and mut.byte(2) == 2
+    for bad in (4, -1, True, "DELETE", "b'\\x07'"):
         with pytest.raises(ValueError, match="o: unknown operation"):
             mut.operation(bad, "o")
+
+
+def test_colours():
+    assert mut.color({"r": 1.0, "g": 0.5, "b": 0, "a": 1}, "c") == (1.0, 0.5, 0.0, 1.0)
+    assert mut.color([0.2, 0.2, 0.2, 2.0], "c") == (0.2, 0.2, 0.2, 1.0)  # clipped to [0, 1]
+    assert mut.color({"r": 1}, "c") == (1.0, 0.0, 0.0, 0.0)  # missing components are 0
+    with pytest.raises(ValueError, match="c: an object colour needs a color"):
+        mut.color(None, "c")
+    with pytest.raises(ValueError, match="c: unknown key 'x'"):
+        mut.color({"x": 1}, "c")
 
 
 def test_the_schema_names_unknown_keys_and_wrong_types():
@@ -91,6 +109,8 @@ def test_the_schema_names_unknown_keys_and_wrong_types():
         ({"world": {"collision_objects": [{"operation": 1.5}]}}, "operation' must be"),
         ({"robot_state": {"is_diff": "no"}}, "'robot_state.is_diff' must be true or false"),
         ({"world": {"collision_objects": {}}}, "must be a list"),
+        ({"world": {"collision_objects": [{"meshes": [{"triangels": []}]}]}}, "triangels"),
+        ({"world": {"collision_objects": [{"planes": [{"coef": "0 0 1 0"}]}]}}, "must be a list"),
     ]:
         with pytest.raises(ConfigError) as info:
             check_tree(mut.PlanningScene, bad, "f")

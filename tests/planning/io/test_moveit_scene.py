@@ -1,8 +1,10 @@
 """MoveIt's PlanningScene YAML: primitives and poses, header frames (world names, fixed frames,
 robot links at the scene's joint state), held objects, operations, allowed collisions (replaced
-by the next scene), and INVALID_SCENE naming the file and key path for anything malformed or
-unsupported; the reader is picked by the file's extension. Property tests: generated scenes load
-as described, corruptions are INVALID_SCENE."""
+by the next scene), INVALID_SCENE naming the file and key path for anything malformed, and one
+warning (INVALID_SCENE when strict) for what cannot be represented; the reader is picked by the
+file's extension. Property tests: generated scenes load as described, corruptions are
+INVALID_SCENE. Meshes, planes, colours, subframes and start states: test_moveit_features.py;
+the real files: test_moveit_real_files.py."""
 
 import logging
 from pathlib import Path
@@ -63,10 +65,10 @@ def scene_text(*objects, **keys) -> str:
     return yaml.safe_dump({"world": {"collision_objects": list(objects)}, **keys})
 
 
-def load_error(scene, path) -> str:
+def load_error(scene, path, **options) -> str:
     before = scene.world_objects
     with pytest.raises(PlanningError) as info:
-        mut.load_moveit_scene(scene, path)
+        mut.load_moveit_scene(scene, path, **options)
     assert info.value.code == ErrorCode.INVALID_SCENE
     assert str(path) in info.value.message
     assert scene.world_objects == before  # a bad file leaves the scene as it was
@@ -233,23 +235,38 @@ def test_operations(caplog, scene, write):
     assert list(scene.world_objects) == ["z"]
 
 
-def malformed_cases() -> list:
-    """The cases of data/malformed_moveit_scenes.yaml as (file contents, error) parameters."""
+def data_cases(kind: str, key: str) -> list:
+    """The ``kind`` cases of data/malformed_moveit_scenes.yaml as (file contents, needle)."""
     cases = yaml.safe_load(
         (Path(__file__).parent / "data/malformed_moveit_scenes.yaml").read_text()
     )
     params = []
-    for case in cases["cases"]:
+    for case in cases[kind]:
         data = case.get("scene", {})
         if "objects" in case:
             data = {**data, "world": {"collision_objects": case["objects"]}}
-        params.append(pytest.param(data, case["error"], id=case["error"][:60]))
+        params.append(pytest.param(data, case[key], id=case[key][:60]))
     return params
 
 
-@pytest.mark.parametrize("data, needle", malformed_cases())
+@pytest.mark.parametrize("data, needle", data_cases("cases", "error"))
 def test_malformed_scenes_name_the_key_path(scene, write, data, needle):
     assert needle in load_error(scene, write(yaml.safe_dump(data)))
+    assert needle in load_error(scene, write(yaml.safe_dump(data)), strict=True)
+
+
+@pytest.mark.parametrize("data, needle", data_cases("dropped", "warning"))
+def test_what_cannot_be_represented_is_one_warning_or_strictly_an_error(
+    caplog, scene, write, data, needle
+):
+    path = write(yaml.safe_dump(data))
+    assert needle in load_error(scene, path, strict=True)
+    with caplog.at_level(logging.WARNING):
+        loaded = mut.load_moveit_scene(scene, path)
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warnings) == 1 and needle in warnings[0] and str(path) in warnings[0]
+    assert loaded.warnings == warnings
+    assert scene.world_objects  # the rest of the file loaded
 
 
 def test_files_that_are_not_scenes(scene, write, tmp_path):
@@ -293,8 +310,10 @@ def test_the_extension_picks_the_reader(scene, write):
 def test_parse_without_a_scene(scene):
     data = yaml.safe_load(SCENE)
     assert sorted(o.name for o in mut.parse_moveit_objects(data)) == ["crate", "pole", "pole#1"]
+    without_robot = {"world": {"collision_objects": [box(frame="panda_hand")]}}
+    assert mut.parse_moveit_objects(without_robot) == []  # left out, with a warning
     with pytest.raises(ValueError, match="unknown frame 'panda_hand'"):
-        mut.parse_moveit_objects({"world": {"collision_objects": [box(frame="panda_hand")]}})
+        mut.parse_moveit_scene(without_robot, strict=True)
     world, held, allowed = mut.parse_moveit_scene(data, scene)
     assert len(world) == 3 and held == [] and allowed == [("panda_link1", "panda_link7")]
 

@@ -78,7 +78,10 @@ def changed(edit) -> dict:
     "edit,fragment",
     [
         (lambda d: d["waypoints"][1].__setitem__(2, math.nan), "waypoints[1][2] must be a finite"),
-        (lambda d: d["waypoints"][2].pop(), "waypoints[2] must have 7 values, got 6"),
+        (
+            lambda d: d["waypoints"][2].pop(),
+            "waypoints[2] must have 7 values (robot.joints), got 6",
+        ),
         (lambda d: d.pop("waypoints"), "plan: waypoints is missing"),
         (lambda d: d.__setitem__("waypoints", []), "waypoints must be a non-empty list"),
         (lambda d: d.__setitem__("colour", "red"), "colour is not a field of a plan"),
@@ -87,7 +90,7 @@ def changed(edit) -> dict:
         (lambda d: d.__setitem__("version", True), "version must be an integer >= 1, got True"),
         (lambda d: d["max_velocity"].__setitem__(3, -1.0), "max_velocity[3] must be in (0, inf]"),
         (lambda d: d["max_acceleration"].__setitem__(0, math.inf), "max_acceleration[0] must be"),
-        (lambda d: d["finger_positions"].__setitem__(1, 0.5), "finger_positions[1] must be in"),
+        (lambda d: d["finger_positions"].__setitem__(1, 500), "finger_positions[1] must be in"),
         (lambda d: d["robot"].pop("joints"), "robot.joints is missing"),
         (lambda d: d["robot"]["joints"].__setitem__(3, 4), "robot.joints[3] must be a non-empty"),
         (lambda d: d["scene"]["world"][0].__setitem__("shape", "cone"), "world[0].shape must be"),

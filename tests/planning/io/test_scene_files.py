@@ -84,6 +84,26 @@ def test_tilted_boxes_and_held_objects_round_trip(scene, write, tmp_path):
     assert scene.place_position is None
 
 
+def test_convex_objects_and_colours_round_trip(scene, tmp_path):
+    scene.clear()
+    corners = [(x, y, z) for x in (0.0, 0.1) for y in (0.0, 0.2) for z in (0.0, 0.3)]
+    X = RigidTransform(RollPitchYaw(0.2, 0.0, 0.1), [0.5, 0.0, 0.3])
+    scene.add_object(SceneObject("hull", "convex", (), X, vertices=corners, color=(1, 0, 0, 1)))
+    scene.add_object(SceneObject("red", "sphere", (0.1,), X, color=(1, 0, 0, 0.5)))
+    world = scene.world_objects
+    out = tmp_path / "saved.yaml"
+    mut.save_scene_yaml(scene, out)
+    data = yaml.safe_load(out.read_text())
+    hull = data["objects"][0]
+    assert hull["shape"] == "convex" and "size" not in hull and len(hull["vertices"]) == 8
+    assert hull["color"] == [1.0, 0.0, 0.0, 1.0] and data["objects"][1]["color"][3] == 0.5
+    scene.clear()
+    mut.load_scene_yaml(scene, out)
+    assert_same_objects(scene.world_objects, world)
+    assert scene.world_objects["hull"].vertices == world["hull"].vertices
+    assert [o.color for o in scene.world_objects.values()] == [o.color for o in world.values()]
+
+
 def test_apply_scene_file_takes_a_parsed_spec(scene):
     spec = mut.SceneFile(
         table=mut.BoxSpec(size=[1.0, 1.0, 0.02], position=[0.3, 0.0, -0.01]),
@@ -114,6 +134,14 @@ DUPLICATES = (
         ("table: {size: [1, 1], position: [0, 0, 0]}", ["'table'", "3 size values"]),
         ("obstacle: {size: [1, 1, 1], position: [0, .nan, 0]}", ["obstacle", "finite"]),
         ("objects: [{name: x, shape: blob, size: [1], position: [0, 0, 0]}]", ["'x'", "blob"]),
+        (
+            "objects: [{name: h, shape: convex, vertices: [[0, 0, 0]], position: [0, 0, 0]}]",
+            ["'h'", "at least 4 vertices"],
+        ),
+        (
+            "objects: [{name: c, shape: sphere, size: [1], position: [0, 0, 0], color: [1]}]",
+            ["'c'", "color must be"],
+        ),
         ("tabel: {size: [1, 1, 1]}", ["unknown", "tabel"]),
         ("object: {size: [1, 1, 1], position: [0, 0, 0], colour: red}", ["object.colour"]),
         ("object: {size: [1, 1, 1], position: [0, 0, 0], mass: heavy}", ["object.mass"]),

@@ -1,4 +1,4 @@
-"""The Panda planning model: converted assets, SRDF filters, named configurations, config."""
+"""The stations' Panda: converted assets, SRDF filters, the planning configuration's checks."""
 
 import numpy as np
 import pytest
@@ -9,11 +9,7 @@ from planning import config as config_mod
 from planning.model import assets as panda_assets
 from planning.model import panda as mut
 from planning.model.panda_config import PandaModelConfig
-
-
-@pytest.fixture(scope="module")
-def model():
-    return mut.build_panda_model(config_mod.PandaPlanningConfig().model)
+from planning.model.planning_model import apply_disabled_collisions
 
 
 def test_urdf_is_cached_with_relative_converted_meshes():
@@ -38,42 +34,6 @@ def test_srdf_is_read():
     assert info.group_states["default"]["panda_joint4"] == pytest.approx(-2.35619)
 
 
-def test_model_has_arm_fingers_and_attachment(model):
-    plant = model.plant
-    assert plant.num_positions() == 9
-    assert list(model.arm_indices) == list(range(7))
-    assert list(model.finger_indices) == [7, 8]
-    for name in ("panda_link0", "panda_hand", "panda_leftfinger", mut.ATTACHMENT_BODY):
-        assert plant.HasBodyNamed(name, model.instance)
-    assert plant.HasFrameNamed("panda_hand_tcp", model.instance)
-
-
-def test_srdf_pairs_are_scene_graph_filters(model):
-    """Filters live in the SceneGraph model, so IK distance constraints see them too."""
-    plant, inspector = model.plant, model.scene_graph.model_inspector()
-
-    def filtered(a, b):
-        ids_a = plant.GetCollisionGeometriesForBody(plant.GetBodyByName(a))
-        ids_b = plant.GetCollisionGeometriesForBody(plant.GetBodyByName(b))
-        return all(inspector.CollisionFiltered(i, j) for i in ids_a for j in ids_b)
-
-    assert filtered("panda_hand", "panda_link5")  # "Default" in the SRDF: not adjacent
-    assert filtered("panda_link3", "panda_rightfinger")
-    assert not filtered("panda_link1", "panda_link7")
-    assert not filtered("panda_link2", "panda_hand")
-
-
-def test_named_configurations(model):
-    named = model.named_configurations
-    assert {"ready", "extended", "transport", "default"} <= set(named)
-    np.testing.assert_allclose(named["default"], named["ready"], atol=1e-3)
-    lower = model.plant.GetPositionLowerLimits()[:7]
-    upper = model.plant.GetPositionUpperLimits()[:7]
-    for name, q in named.items():
-        assert q.shape == (7,), name
-        assert np.all(q >= lower) and np.all(q <= upper), name
-
-
 def test_default_config_has_a_table_with_top_at_zero():
     table = config_mod.PandaPlanningConfig().table
     assert table.position[2] + table.size[2] / 2 == pytest.approx(0.0)
@@ -83,7 +43,7 @@ def test_default_config_has_a_table_with_top_at_zero():
     "text, match",
     [
         ("model: {colour: red}", "unknown"),
-        ("model: {named_configurations: {bad: [0, 1]}}", "7"),
+        ("model: {named_configurations: {bad: [0, 1]}}", "has 2 values, group 'arm' has 7"),
         ("model: {finger_position: 0.5}", "finger_position"),
         ("table: {size: [1, 1], position: [0, 0, 0]}", "table"),
         ("ik: {time_budget: 0}", "time_budget"),
@@ -100,14 +60,14 @@ def test_missing_config_file(tmp_path):
         config_mod.load_panda_config(tmp_path / "nope.yaml")
 
 
-def test_bad_disabled_pair_names_the_body(model):
+def test_bad_disabled_pair_names_the_body():
     from pydrake.planning import RobotDiagramBuilder
 
     builder = RobotDiagramBuilder(time_step=0.0)
     instance = mut.add_panda(builder.plant(), PandaModelConfig())
     builder.plant().Finalize()
     with pytest.raises(ConfigError, match="panda_link9"):
-        mut.apply_disabled_collisions(
+        apply_disabled_collisions(
             builder.plant(), builder.scene_graph(), instance, [("panda_link9", "panda_hand")]
         )
 
@@ -132,7 +92,7 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
         builder.plant().Finalize()
         if apply:
             pairs = mut.disabled_collision_pairs(config.model)
-            mut.apply_disabled_collisions(builder.plant(), builder.scene_graph(), instance, pairs)
+            apply_disabled_collisions(builder.plant(), builder.scene_graph(), instance, pairs)
         diagram = builder.Build()
         context = diagram.CreateDefaultContext()
         plant_context = diagram.plant().GetMyMutableContextFromRoot(context)

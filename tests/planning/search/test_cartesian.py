@@ -25,7 +25,7 @@ def scene():
 
 @pytest.fixture(scope="module")
 def frame(scene):
-    return scene.plant.GetFrameByName(scene.config.model.ee_frame, scene.model.instance)
+    return scene.plant.GetFrameByName(scene.model.ee_frame, scene.model.instance)
 
 
 @pytest.fixture(scope="module")

@@ -89,7 +89,7 @@ def test_bad_requests_are_rejected(dut):
     assert code(p_WE=[0.5, 0.1])[0] == ErrorCode.INVALID_GOAL
     assert code(frame="no_such_frame", p_WE=TARGET) == (
         ErrorCode.FRAME_NOT_FOUND,
-        "the Panda has no frame 'no_such_frame'",
+        "panda has no frame 'no_such_frame'",
     )
     far, message = code(p_WE=[2.0, 0.0, 0.5])
     assert far == ErrorCode.NO_IK_SOLUTION and "beyond the reach" in message

@@ -76,7 +76,7 @@ def test_the_frame_pose_and_jacobian_are_drakes(scene, name):
 
 
 def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
-    frame, chain, body, X_BE, arm = chain_of(scene, scene.config.model.ee_frame)
+    frame, chain, body, X_BE, arm = chain_of(scene, scene.model.ee_frame)
     adapter = CheckerAdapter(scene)
     lower, upper = adapter.lower, adapter.upper
     data = (scene.full_q(np.zeros(7)), arm, *chain, body, X_BE, lower, upper)
@@ -103,7 +103,7 @@ def test_newton_reaches_reachable_targets_and_gives_up_on_others(scene):
 
 
 def test_a_line_of_poses_is_solved_step_by_step_and_stops_at_a_jump_or_a_miss(scene):
-    frame, chain, body, X_BE, arm = chain_of(scene, scene.config.model.ee_frame)
+    frame, chain, body, X_BE, arm = chain_of(scene, scene.model.ee_frame)
     adapter = CheckerAdapter(scene)
     lower, upper = adapter.lower, adapter.upper
     q0 = scene.model.named_configurations["ready"][:7].astype(float)

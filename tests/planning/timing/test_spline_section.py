@@ -65,6 +65,6 @@ def test_a_smooth_section_starts_and_ends_at_rest_within_the_limits():
     assert np.all(np.linalg.norm(np.diff(samples, axis=0), axis=1) <= 0.011)
 
 
-def test_the_seven_joint_plant_has_seven_joints():
-    assert mut.seven_joint_plant().num_positions() == 7
-    assert mut.seven_joint_plant() is mut.seven_joint_plant()  # made once
+def test_the_chain_plant_has_the_joints_asked_for():
+    assert mut.chain_plant(7).num_positions() == 7 and mut.chain_plant(6).num_positions() == 6
+    assert mut.chain_plant(7) is mut.chain_plant(7)  # made once per count

@@ -6,7 +6,7 @@ import pytest
 from pydrake.multibody.optimization import CalcGridPointsOptions, Toppra
 
 import planning.timing.toppra as mut
-from planning.timing.spline_section import drake_spline, seven_joint_plant
+from planning.timing.spline_section import chain_plant, drake_spline
 
 V_MAX = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])
 A_MAX = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
@@ -24,7 +24,7 @@ def random_path(seed: int):
 @pytest.mark.parametrize("seed", range(4))
 def test_the_same_duration_as_drakes_toppra(seed):
     path, grid = random_path(seed)
-    drake = Toppra(path, seven_joint_plant(), grid)
+    drake = Toppra(path, chain_plant(7), grid)
     drake.AddJointVelocityLimit(-V_MAX, V_MAX)
     drake.AddJointAccelerationLimit(-A_MAX, A_MAX)
     expected = drake.SolvePathParameterization().end_time()
