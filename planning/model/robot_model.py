@@ -24,8 +24,9 @@ the SRDF's virtual joint; a ``fixed`` one, or none, is a weld here too. A ``floa
 ``planar`` virtual joint (a mobile base: Baxter's SRDF declares one) is also welded, at the world
 origin: planning moves the group's joints, never the base, so the plant keeps the base where a
 MoveIt planning scene keeps it unless a start state moves it. Drake's parser warnings about what
-planning does not use (inertias it finds unphysical, mimic tags it ignores) are logged at debug
-level by this module instead of printed; every other warning shows, and errors raise.
+planning does not use (inertias it finds unphysical, mimic tags it ignores, joint friction) are
+logged at debug level by this module instead of printed; every other warning shows, and errors
+raise.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from planning.model.srdf_check import check_srdf
 from planning.model.urdf_tree import UrdfTree, read_urdf_tree
 
 _log = logging.getLogger(__name__)
-_DRAKE_NOISE = re.compile(r"inertia|mimic element", re.IGNORECASE)
+_DRAKE_NOISE = re.compile(r"inertia|mimic element|'friction' attribute", re.IGNORECASE)
 """Drake parser warnings that do not matter to planning (logged at debug level)."""
 
 
