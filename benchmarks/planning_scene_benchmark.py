@@ -152,7 +152,7 @@ def main() -> None:
     parser.add_argument("--collision-geometry", default=None, help="convex_mesh or primitives")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    config = planning.PandaPlanningConfig()
+    config = planning.PlanningConfig()
     if args.collision_geometry:
         config.model.collision_geometry = args.collision_geometry
     start = time.perf_counter()

@@ -49,13 +49,13 @@ from planning.model.layout import (
     NUM_POSITIONS,
     READY_Q,
 )
+from planning.model.model_config import RobotModelConfig
 from planning.model.panda import (
     ARM_JOINTS,
     FINGER_JOINTS,
     add_panda,
     disabled_collision_pairs,
 )
-from planning.model.panda_config import PandaModelConfig
 from planning.model.planning_model import apply_disabled_collisions
 from planning.scene_objects import FREE_BODY_POSITIONS, free_body_positions
 
@@ -85,7 +85,7 @@ class PandaStationConfig:
     """
 
     plant: MultibodyPlantConfig = dc.field(default_factory=_default_plant)
-    model: PandaModelConfig = dc.field(default_factory=PandaModelConfig)
+    model: RobotModelConfig = dc.field(default_factory=RobotModelConfig)
     arm_kp: list[float] = dc.field(default_factory=lambda: [2000.0] * 4 + [500.0] * 3)  # N m/rad
     arm_kd: list[float] = dc.field(default_factory=lambda: [100.0] * 4 + [20.0] * 3)  # N m s/rad
     arm_effort_limits: list[float] = dc.field(  # N m, Franka's datasheet

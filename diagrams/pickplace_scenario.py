@@ -6,7 +6,7 @@ typed by the schema that part uses, and every value lives in one place:
 * ``scene`` (``planning.io.scene_files.SceneFile``): table, object, obstacle, place. When absent,
   the scene is read from ``scene_file`` (relative to the scenario file), by default
   ``config/pickplace.yaml``. The table lives here only.
-* ``robot`` (``planning.config.PandaPlanningConfig``): the Panda's model (collision geometry,
+* ``robot`` (``planning.config.PlanningConfig``): the Panda's model (collision geometry,
   named configurations, disabled pairs) and IK, shared by the planner and the simulated station.
 * ``initial_configuration``: the named configuration the arm starts in (fingers open at
   ``robot.model.finger_position``).
@@ -30,7 +30,7 @@ from diagrams.panda_station import MODES, PandaStationConfig, validate_station_c
 from drake_sim.base.config import apply_overrides, check_tree, load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
-from planning.config import PandaPlanningConfig, check_panda_config
+from planning.config import PlanningConfig, check_planning_config
 from planning.execution.options import InterfaceOptions
 from planning.io.scene_files import SceneFile
 from planning.model.planning_model import finger_defaults, named_configurations
@@ -49,8 +49,8 @@ _FILLED = {
 }
 
 
-def _robot_without_table() -> PandaPlanningConfig:
-    return PandaPlanningConfig(table=None)
+def _robot_without_table() -> PlanningConfig:
+    return PlanningConfig(table=None)
 
 
 @dc.dataclass
@@ -60,7 +60,7 @@ class PickPlaceScenario:
     # Our scene YAML, relative to the scenario file; read when ``scene`` is not given.
     scene_file: str = "pickplace.yaml"
     scene: SceneFile | None = None
-    robot: PandaPlanningConfig = dc.field(default_factory=_robot_without_table)
+    robot: PlanningConfig = dc.field(default_factory=_robot_without_table)
     # Named configuration of ``robot.model`` (or the SRDF's) the arm starts in.
     initial_configuration: str = "ready"
     station: PandaStationConfig = dc.field(default_factory=PandaStationConfig)
@@ -145,7 +145,7 @@ def check_scenario(scenario: PickPlaceScenario, where: str = "scenario") -> None
             raise ConfigError(f"{where}: the scene has no '{key}' key ({what})")
     if scenario.mode not in MODES:
         raise ConfigError(f"{where}: 'mode' must be one of {', '.join(MODES)}")
-    check_panda_config(scenario.robot, where)
+    check_planning_config(scenario.robot, where)
     try:
         scenario.planner.check()
     except ValueError as e:

@@ -16,7 +16,7 @@ Its tools are apps and stand outside it: ``python -m planning.benchmark`` (a nam
 to ``drake_sim.tools.plan_benchmark``) and ``python -m drake_sim.tools.regions``.
 """
 
-from planning.config import IkOptions, PandaPlanningConfig, load_panda_config
+from planning.config import IkOptions, PlanningConfig, load_planning_config
 from planning.errors import ErrorCode, PlanningError
 from planning.execution.options import InterfaceOptions
 from planning.interface import MotionPlanningInterface
@@ -38,7 +38,7 @@ __all__ = [
     "MotionPlanner",
     "MotionPlannerOptions",
     "MotionPlanningInterface",
-    "PandaPlanningConfig",
+    "PlanningConfig",
     "PickPlaceOptions",
     "PickPlaceTask",
     "Plan",
@@ -52,7 +52,7 @@ __all__ = [
     "TaskReport",
     "describe_scene",
     "load_moveit_scene",
-    "load_panda_config",
+    "load_planning_config",
     "load_planner_options",
     "load_scene_yaml",
     "make_pose",

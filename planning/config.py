@@ -1,7 +1,7 @@
-"""Typed configuration of the Panda planning model, its scene and its IK.
+"""Typed configuration of the planning robot (the Panda by default), its scene and its IK.
 
-The model's and the table's sections (``PandaModelConfig``, ``TableConfig``) live with the model
-that reads them, in ``planning.model.panda_config``; this module gathers them with the IK's
+The model's and the table's sections (``RobotModelConfig``, ``TableConfig``) live with the model
+that reads them, in ``planning.model.model_config``; this module gathers them with the IK's
 options, and loads and checks the whole. Every field has a default (the one place of each
 value), so a YAML file needs only the keys it changes; unknown keys are errors
 (``drake_sim.base.config.load_typed``). In the pick-and-place scenario this is the ``robot``
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
-from planning.model.panda_config import PandaModelConfig, TableConfig
+from planning.model.model_config import RobotModelConfig, TableConfig
 from planning.model.planning_model import finger_defaults, named_configurations
 
 
@@ -37,19 +37,20 @@ class IkOptions:
 
 
 @dc.dataclass
-class PandaPlanningConfig:
-    """The Panda for planning: its model, the table a new scene starts with, and IK."""
+class PlanningConfig:
+    """A robot for planning: its model (a description: the Panda by default), the table a new
+    scene starts with, and IK."""
 
-    model: PandaModelConfig = dc.field(default_factory=PandaModelConfig)
+    model: RobotModelConfig = dc.field(default_factory=RobotModelConfig)
     # The table every new PlanningScene starts with, as a world object named "table"; null: none.
     table: TableConfig | None = dc.field(default_factory=TableConfig)
     ik: IkOptions = dc.field(default_factory=IkOptions)
 
 
-def load_panda_config(
+def load_planning_config(
     filename: Path | str | None = None, *, data: str | None = None
-) -> PandaPlanningConfig:
-    """Loads a ``PandaPlanningConfig`` from a YAML file or string (missing keys keep defaults).
+) -> PlanningConfig:
+    """Loads a ``PlanningConfig`` from a YAML file or string (missing keys keep defaults).
 
     Args:
         filename: the YAML file; or
@@ -59,12 +60,12 @@ def load_panda_config(
         ConfigError: the file is missing or malformed, or has an unknown key or a bad value.
     """
     where = str(filename) if filename is not None else "<yaml>"
-    config = load_typed(PandaPlanningConfig, filename=filename, data=data, where=where)
-    check_panda_config(config, where)
+    config = load_typed(PlanningConfig, filename=filename, data=data, where=where)
+    check_planning_config(config, where)
     return config
 
 
-def check_panda_config(config: PandaPlanningConfig, where: str = "robot") -> None:
+def check_planning_config(config: PlanningConfig, where: str = "robot") -> None:
     """Raises ConfigError for values the planning model cannot use (the robot's files are read
     to check the named configurations' sizes and the finger position against its joints)."""
     model = config.model

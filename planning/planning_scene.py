@@ -28,7 +28,7 @@ from pydrake.geometry import GeometryId
 from pydrake.math import RigidTransform
 
 from planning.collision.batched_checker import BatchedCollisionChecker
-from planning.config import PandaPlanningConfig
+from planning.config import PlanningConfig
 from planning.errors import ErrorCode, PlanningError
 from planning.io import scene_files
 from planning.model.planning_model import PlanningModel, build_planning_model
@@ -45,13 +45,13 @@ class PlanningScene:
     or all of the plant's positions (the Panda: 7 arm joints, or those and its 2 fingers).
 
     Args:
-        config: the planning configuration; ``PandaPlanningConfig()`` when None. Its ``table``
+        config: the planning configuration; ``PlanningConfig()`` when None. Its ``table``
             becomes the world object "table".
         meshcat: when given, ``publish`` shows the scene there.
     """
 
-    def __init__(self, config: PandaPlanningConfig | None = None, *, meshcat=None):
-        self._config = config if config is not None else PandaPlanningConfig()
+    def __init__(self, config: PlanningConfig | None = None, *, meshcat=None):
+        self._config = config if config is not None else PlanningConfig()
         model = build_planning_model(self._config.model, meshcat=meshcat)
         options = self._config.model
         self._checker = BatchedCollisionChecker(
@@ -94,7 +94,7 @@ class PlanningScene:
 
     # ----------------------------------------------------------------------------- model ----
     @property
-    def config(self) -> PandaPlanningConfig:
+    def config(self) -> PlanningConfig:
         return self._config
 
     @property

@@ -59,7 +59,7 @@ from drake_sim.tools.ompl_baseline import ompl_available, ompl_plan
 from drake_sim.tools.plan_benchmark_profile import PhaseProfiler, breakdown
 from planning import planner_kernels
 from planning.collision.checker import CheckerAdapter, first_invalid_segment
-from planning.config import PandaPlanningConfig, check_panda_config
+from planning.config import PlanningConfig, check_planning_config
 from planning.errors import PlanningError
 from planning.io import mbm, problem_files
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions, load_planner_options
@@ -72,14 +72,14 @@ RANDOM_FAMILY = "random"
 """The family folder of random problems (``--random``, ``--save-problems``)."""
 
 
-def robot_config(robot: str) -> PandaPlanningConfig:
+def robot_config(robot: str) -> PlanningConfig:
     """The planning configuration of ``--robot``: the Panda with its table (the MBM scenes
     replace it), any other robot without one."""
-    config = PandaPlanningConfig()
+    config = PlanningConfig()
     if robot != "panda":
         config.model.description = robot
         config.table = None
-    check_panda_config(config, f"--robot {robot}")
+    check_planning_config(config, f"--robot {robot}")
     return config
 
 

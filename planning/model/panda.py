@@ -20,7 +20,7 @@ from pydrake.multibody.tree import ModelInstanceIndex, SpatialInertia
 
 from drake_sim.base.resources import make_parser
 from planning.model.assets import panda_urdf, read_srdf
-from planning.model.panda_config import PandaModelConfig, TableConfig
+from planning.model.model_config import RobotModelConfig, TableConfig
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 """The seven arm joints, base to flange."""
@@ -31,7 +31,7 @@ ATTACHMENT_BODY = "panda_attachment"
 """The body, welded to the hand, that carries attached objects."""
 
 
-def add_panda(plant: MultibodyPlant, config: PandaModelConfig) -> ModelInstanceIndex:
+def add_panda(plant: MultibodyPlant, config: RobotModelConfig) -> ModelInstanceIndex:
     """Adds the Panda (welded at the world origin) and its attachment body to ``plant``.
 
     Args:
@@ -63,7 +63,7 @@ def add_table(plant: MultibodyPlant, table: TableConfig) -> None:
     plant.RegisterVisualGeometry(world, X_WT, shape, "table", Rgba(0.55, 0.4, 0.25, 1.0).rgba)
 
 
-def disabled_collision_pairs(config: PandaModelConfig) -> list[tuple[str, str]]:
+def disabled_collision_pairs(config: RobotModelConfig) -> list[tuple[str, str]]:
     """Returns the SRDF's disabled link pairs, the attachment body against the hand's fingers
     (held objects never collide with the fingers holding them), and the configuration's extra
     pairs."""

@@ -2,7 +2,7 @@
 position indices, a body for held objects, and the collision filters of its SRDF.
 
 ``build_planning_model`` reads the robot description the configuration names
-(``PandaModelConfig.description``: a shipped name such as "panda" or "ur5", found in
+(``RobotModelConfig.description``: a shipped name such as "panda" or "ur5", found in
 ``config/robots/``, a description YAML, or a ``*_moveit_config`` folder), adds the robot to a
 ``RobotDiagram`` (root welded to the world, ``RobotModel.add_to``) and an attachment body welded
 to the description's ``attach_link`` (``<robot>_attachment``): objects the robot holds hang on
@@ -32,7 +32,7 @@ from pydrake.planning import RobotDiagram, RobotDiagramBuilder
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
-from planning.model.panda_config import PandaModelConfig
+from planning.model.model_config import RobotModelConfig
 from planning.model.robot_model import RobotModel, load_robot_model
 
 
@@ -57,7 +57,7 @@ def description_file(name: str) -> Path:
     return Path(name)
 
 
-def robot_model(config: PandaModelConfig) -> RobotModel:
+def robot_model(config: RobotModelConfig) -> RobotModel:
     """Loads the robot model the configuration names (its ``description`` and ``group``);
     loaded once per process while its description file is unchanged (do not modify it)."""
     name = config.description
@@ -113,7 +113,7 @@ class PlanningModel:
     ee_frame: str
     disabled_pairs: list[tuple[str, str]]
     attachment_body: str
-    config: PandaModelConfig
+    config: RobotModelConfig
 
     @property
     def plant(self) -> MultibodyPlant:
@@ -152,7 +152,7 @@ class PlanningModel:
         return self.other_indices[self.finger_mask]
 
 
-def build_planning_model(config: PandaModelConfig, *, meshcat=None) -> PlanningModel:
+def build_planning_model(config: RobotModelConfig, *, meshcat=None) -> PlanningModel:
     """Builds the planning model the configuration names, collision filters applied.
 
     Args:
@@ -242,7 +242,7 @@ def apply_disabled_collisions(
         manager.Apply(CollisionFilterDeclaration().ExcludeBetween(sets[0], sets[1]))
 
 
-def named_configurations(config: PandaModelConfig) -> dict[str, np.ndarray]:
+def named_configurations(config: RobotModelConfig) -> dict[str, np.ndarray]:
     """The group's named configurations for a configuration (the description's, then the
     configuration's), read from the files without building a plant.
 
@@ -252,7 +252,7 @@ def named_configurations(config: PandaModelConfig) -> dict[str, np.ndarray]:
     return _named_configurations(robot_model(config), config)
 
 
-def finger_defaults(config: PandaModelConfig) -> list[float]:
+def finger_defaults(config: RobotModelConfig) -> list[float]:
     """The finger joints' start positions (the joints below the attach link, in the URDF's
     order): ``config.finger_position`` for each, else the description's default positions."""
     robot = robot_model(config)
@@ -289,7 +289,7 @@ def _touch_links(robot: RobotModel) -> list[str]:
     return below
 
 
-def _named_configurations(robot: RobotModel, config: PandaModelConfig) -> dict:
+def _named_configurations(robot: RobotModel, config: RobotModelConfig) -> dict:
     named = {name: q.copy() for name, q in robot.named_states.items()}
     for name, q in config.named_configurations.items():
         if len(q) != robot.num_joints:

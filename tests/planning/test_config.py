@@ -9,12 +9,12 @@ import pytest
 import planning.config as mut
 from drake_sim.base.errors import ConfigError
 from planning.model.layout import FINGER_OPEN, READY_Q
-from planning.model.panda_config import PandaModelConfig
+from planning.model.model_config import RobotModelConfig
 from planning.model.planning_model import finger_defaults, named_configurations
 
 
 def test_defaults_describe_the_panda_on_its_table():
-    dut = mut.PandaPlanningConfig()
+    dut = mut.PlanningConfig()
     model = dut.model
     assert model.description == "panda" and model.collision_geometry == "convex_mesh"
     named = named_configurations(model)
@@ -26,18 +26,18 @@ def test_defaults_describe_the_panda_on_its_table():
     top = dut.table.position[2] + 0.5 * dut.table.size[2]
     assert top == pytest.approx(0.0)  # the Panda stands on the table top
     assert dut.ik == mut.IkOptions() and dut.ik.seed == 0
-    mut.check_panda_config(dut)  # the defaults are valid
+    mut.check_planning_config(dut)  # the defaults are valid
     # Each config gets its own lists: changing one leaves the defaults alone.
     dut.model.named_configurations["ready"] = [1.0] * 7
-    assert mut.PandaPlanningConfig().model.named_configurations == {}
+    assert mut.PlanningConfig().model.named_configurations == {}
 
 
 def test_yaml_string_changes_only_its_keys():
-    dut = mut.load_panda_config(
+    dut = mut.load_planning_config(
         data="model: {finger_position: 0.02, named_configurations: {up: [0, 0, 0, -1, 0, 1, 0]}}\n"
         "ik: {max_restarts: 3, minimum_distance: null}\n"
     )
-    default = mut.PandaPlanningConfig()
+    default = mut.PlanningConfig()
     assert dut.model.finger_position == 0.02
     assert dut.model.named_configurations["up"] == [0, 0, 0, -1, 0, 1, 0]
     assert dut.ik.max_restarts == 3 and dut.ik.minimum_distance is None
@@ -48,12 +48,12 @@ def test_yaml_string_changes_only_its_keys():
 def test_yaml_file_and_a_null_table(tmp_path):
     path = tmp_path / "panda.yaml"
     path.write_text("table: null\nmodel: {collision_geometry: primitives}\n")
-    dut = mut.load_panda_config(path)
+    dut = mut.load_planning_config(path)
     assert dut.table is None and dut.model.collision_geometry == "primitives"
-    assert mut.load_panda_config(str(path)) == dut
+    assert mut.load_planning_config(str(path)) == dut
     empty = tmp_path / "empty.yaml"
     empty.write_text("")
-    assert mut.load_panda_config(empty) == mut.PandaPlanningConfig()
+    assert mut.load_planning_config(empty) == mut.PlanningConfig()
 
 
 @pytest.mark.parametrize(
@@ -81,7 +81,7 @@ def test_bad_yaml_raises_config_error_naming_file_and_key(tmp_path, text, needle
     path = tmp_path / "bad.yaml"
     path.write_text(text)
     with pytest.raises(ConfigError) as info:
-        mut.load_panda_config(path)
+        mut.load_planning_config(path)
     message = str(info.value)
     for needle in [str(path), *needles]:
         assert needle in message
@@ -90,15 +90,15 @@ def test_bad_yaml_raises_config_error_naming_file_and_key(tmp_path, text, needle
 
 def test_missing_file_raises_config_error(tmp_path):
     with pytest.raises(ConfigError, match="nowhere.yaml"):
-        mut.load_panda_config(tmp_path / "nowhere.yaml")
+        mut.load_planning_config(tmp_path / "nowhere.yaml")
 
 
 def test_check_names_where_the_values_came_from():
-    bad = mut.PandaPlanningConfig(ik=mut.IkOptions(max_restarts=-1))
+    bad = mut.PlanningConfig(ik=mut.IkOptions(max_restarts=-1))
     with pytest.raises(ConfigError, match="^robot: ik"):
-        mut.check_panda_config(bad)
+        mut.check_planning_config(bad)
     with pytest.raises(ConfigError, match="^scenario.yaml: ik"):
-        mut.check_panda_config(bad, "scenario.yaml")
-    named = dc.replace(PandaModelConfig(), named_configurations={"pi": [math.pi] * 6})
+        mut.check_planning_config(bad, "scenario.yaml")
+    named = dc.replace(RobotModelConfig(), named_configurations={"pi": [math.pi] * 6})
     with pytest.raises(ConfigError, match="named_configurations.pi has 6 values, group 'arm'"):
-        mut.check_panda_config(mut.PandaPlanningConfig(model=named))
+        mut.check_planning_config(mut.PlanningConfig(model=named))

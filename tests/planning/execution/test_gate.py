@@ -14,13 +14,13 @@ from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.planning_station import make_planning_station
 from planning import ErrorCode, Plan, PlanningError, PlanningScene
 from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, READY_Q
-from planning.model.panda_config import PandaModelConfig
+from planning.model.model_config import RobotModelConfig
 from planning.model.planning_model import robot_model
 from planning.planner_options import TimingOptions
 from planning.task.pick_place import PickPlaceTask
 
 # The Panda's datasheet limits (its description's joint_limits.yaml).
-LIMITS = TimingOptions().with_robot_limits(robot_model(PandaModelConfig()))
+LIMITS = TimingOptions().with_robot_limits(robot_model(RobotModelConfig()))
 V_MAX = np.array(LIMITS.max_velocity)
 A_MAX = np.array(LIMITS.max_acceleration)
 READY = np.array(READY_Q)

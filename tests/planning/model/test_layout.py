@@ -3,13 +3,13 @@
 import numpy as np
 
 import planning.model.layout as mut
-from planning import PandaPlanningConfig
+from planning import PlanningConfig
 from planning.model.panda import ARM_JOINTS, FINGER_JOINTS
 from planning.model.planning_model import build_planning_model
 
 
 def test_layout_matches_the_plant():
-    model = build_planning_model(PandaPlanningConfig().model)
+    model = build_planning_model(PlanningConfig().model)
     assert len(ARM_JOINTS) == mut.NUM_ARM_JOINTS and len(FINGER_JOINTS) == mut.NUM_FINGERS
     assert model.plant.num_positions() == mut.NUM_POSITIONS
     assert model.plant.num_multibody_states() == mut.NUM_STATES
@@ -19,7 +19,7 @@ def test_layout_matches_the_plant():
 
 
 def test_ready_is_within_the_joint_limits_and_is_the_default_named_configuration():
-    model = build_planning_model(PandaPlanningConfig().model)
+    model = build_planning_model(PlanningConfig().model)
     lower = model.plant.GetPositionLowerLimits()[model.arm_indices]
     upper = model.plant.GetPositionUpperLimits()[model.arm_indices]
     ready = np.asarray(mut.READY_Q)

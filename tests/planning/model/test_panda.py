@@ -8,7 +8,7 @@ from drake_sim.base.resources import cache_dir
 from planning import config as config_mod
 from planning.model import assets as panda_assets
 from planning.model import panda as mut
-from planning.model.panda_config import PandaModelConfig
+from planning.model.model_config import RobotModelConfig
 from planning.model.planning_model import apply_disabled_collisions
 
 
@@ -35,7 +35,7 @@ def test_srdf_is_read():
 
 
 def test_default_config_has_a_table_with_top_at_zero():
-    table = config_mod.PandaPlanningConfig().table
+    table = config_mod.PlanningConfig().table
     assert table.position[2] + table.size[2] / 2 == pytest.approx(0.0)
 
 
@@ -52,19 +52,19 @@ def test_default_config_has_a_table_with_top_at_zero():
 )
 def test_bad_config_is_a_config_error(text, match):
     with pytest.raises(ConfigError, match=match):
-        config_mod.load_panda_config(data=text)
+        config_mod.load_planning_config(data=text)
 
 
 def test_missing_config_file(tmp_path):
     with pytest.raises(ConfigError, match="no such file"):
-        config_mod.load_panda_config(tmp_path / "nope.yaml")
+        config_mod.load_planning_config(tmp_path / "nope.yaml")
 
 
 def test_bad_disabled_pair_names_the_body():
     from pydrake.planning import RobotDiagramBuilder
 
     builder = RobotDiagramBuilder(time_step=0.0)
-    instance = mut.add_panda(builder.plant(), PandaModelConfig())
+    instance = mut.add_panda(builder.plant(), RobotModelConfig())
     builder.plant().Finalize()
     with pytest.raises(ConfigError, match="panda_link9"):
         apply_disabled_collisions(
@@ -79,7 +79,7 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
 
     from planning import PlanningScene
 
-    config = config_mod.PandaPlanningConfig()
+    config = config_mod.PlanningConfig()
     config.table = None
     scene = PlanningScene(config)
     rng = np.random.default_rng(0)
@@ -110,10 +110,10 @@ def test_add_table_has_its_top_at_zero():
     from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
     from pydrake.systems.framework import DiagramBuilder
 
-    from planning.config import PandaPlanningConfig
+    from planning.config import PlanningConfig
     from planning.model.panda import add_table
 
-    table = PandaPlanningConfig().table
+    table = PlanningConfig().table
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
     add_table(plant, table)

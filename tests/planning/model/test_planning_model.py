@@ -6,12 +6,12 @@ import pytest
 
 from drake_sim.base.errors import ConfigError
 from planning.model import planning_model as mut
-from planning.model.panda_config import PandaModelConfig
+from planning.model.model_config import RobotModelConfig
 
 
 @pytest.fixture(scope="module")
 def panda():
-    return mut.build_planning_model(PandaModelConfig())
+    return mut.build_planning_model(RobotModelConfig())
 
 
 def test_the_panda_has_its_arm_fingers_and_attachment(panda):
@@ -56,7 +56,7 @@ def test_named_configurations_come_from_the_description_then_the_config(panda):
     for name, q in named.items():
         assert q.shape == (7,), name
         assert np.all(q >= panda.robot.lower) and np.all(q <= panda.robot.upper), name
-    config = PandaModelConfig(named_configurations={"up": [0, 0, 0, -1, 0, 1, 0], "ready": [0] * 7})
+    config = RobotModelConfig(named_configurations={"up": [0, 0, 0, -1, 0, 1, 0], "ready": [0] * 7})
     named = mut.named_configurations(config)
     assert named["up"][3] == -1 and not named["ready"].any() and "transport" in named
 
@@ -66,7 +66,7 @@ def test_named_configurations_come_from_the_description_then_the_config(panda):
 )
 def test_shipped_arms_build_with_their_groups(robot, joints, others):
     try:
-        model = mut.build_planning_model(PandaModelConfig(description=robot))
+        model = mut.build_planning_model(RobotModelConfig(description=robot))
     except ConfigError as e:  # the vamp sdist cannot be had (no network, no cache)
         pytest.skip(str(e))
     assert model.num_joints == joints and len(model.robot.joint_names) == joints
@@ -79,14 +79,14 @@ def test_shipped_arms_build_with_their_groups(robot, joints, others):
 @pytest.mark.parametrize(
     "config, match",
     [
-        (PandaModelConfig(description="nope"), "no shipped robot 'nope'"),
-        (PandaModelConfig(description="missing/robot.yaml"), "robot.yaml"),
-        (PandaModelConfig(ee_frame="no_such_frame"), "no frame 'no_such_frame'"),
-        (PandaModelConfig(group="nogroup"), "nogroup"),
-        (PandaModelConfig(named_configurations={"x": [0, 1]}), "has 2 values"),
-        (PandaModelConfig(finger_position=0.5), "finger_position"),
-        (PandaModelConfig(collision_geometry="voxels"), "collision_geometry"),
-        (PandaModelConfig(description="ur5", collision_geometry="primitives"), "Panda only"),
+        (RobotModelConfig(description="nope"), "no shipped robot 'nope'"),
+        (RobotModelConfig(description="missing/robot.yaml"), "robot.yaml"),
+        (RobotModelConfig(ee_frame="no_such_frame"), "no frame 'no_such_frame'"),
+        (RobotModelConfig(group="nogroup"), "nogroup"),
+        (RobotModelConfig(named_configurations={"x": [0, 1]}), "has 2 values"),
+        (RobotModelConfig(finger_position=0.5), "finger_position"),
+        (RobotModelConfig(collision_geometry="voxels"), "collision_geometry"),
+        (RobotModelConfig(description="ur5", collision_geometry="primitives"), "Panda only"),
     ],
 )
 def test_bad_configurations_name_the_problem(config, match):
@@ -107,9 +107,9 @@ def test_a_description_yaml_sets_frames_states_and_other_joints(tmp_path):
             "default_positions: {panda_finger_joint1: 0.01}",
         )
     )
-    model = mut.build_planning_model(PandaModelConfig(description=str(path)))
+    model = mut.build_planning_model(RobotModelConfig(description=str(path)))
     assert model.ee_frame == "panda_link8"
     np.testing.assert_allclose(model.default_other, [0.01, 0.0])
     path.write_text(text.replace("attach_link: panda_hand", "attach_link: panda_link99"))
     with pytest.raises(ConfigError, match="attach_link: the URDF has no link 'panda_link99'"):
-        mut.build_planning_model(PandaModelConfig(description=str(path)))
+        mut.build_planning_model(RobotModelConfig(description=str(path)))

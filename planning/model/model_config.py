@@ -1,6 +1,6 @@
 """How the robot is loaded for planning, and the table a new scene starts with.
 
-The ``model`` and ``table`` sections of ``planning.config.PandaPlanningConfig`` (the ``robot``
+The ``model`` and ``table`` sections of ``planning.config.PlanningConfig`` (the ``robot``
 section of the pick-and-place scenario), kept with the model that reads them
 (``planning.model.planning_model``). The robot is a description (``description``: the Panda by
 default); what is robot-specific (frames, named states, finger positions) comes from it, and
@@ -21,7 +21,7 @@ class TableConfig:
 
 
 @dc.dataclass
-class PandaModelConfig:
+class RobotModelConfig:
     """How the robot is loaded for planning."""
 
     # The robot: a shipped robot's name (config/robots/<name>.yaml: panda, ur5, fetch, baxter),
