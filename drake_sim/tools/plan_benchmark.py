@@ -1,4 +1,5 @@
-"""``python -m planning.benchmark``: MotionPlanner on the MotionBenchMaker Panda problems.
+"""``python -m planning.benchmark``: MotionPlanner on MotionBenchMaker problems (the Panda's, or
+another robot's with ``--robot``).
 
 Usage::
 
@@ -11,9 +12,12 @@ The MotionBenchMaker problems are third-party data, not part of the repository:
 holding ``problems.tar.bz2``, or the archive itself, unpacked once into the cache), else from
 ``$DRAKE_SIM_MBM`` (the same forms), else from the cache (``<cache>/mbm/panda``), else it
 downloads them once from the package index with pip (the ``vamp-planner`` source distribution,
-about 65 MB) into the cache. For each problem the scene is loaded, the fingers are set to the
-request's positions, and the start and goal are checked (``valid``: in limits and collision-free
-under our model); valid problems are planned with ``MotionPlanner.plan_path`` (the checks and the
+about 65 MB) into the cache. For each problem the scene is loaded, the joints outside the
+planning group are set to the request's start state, a start within ``START_BOUNDS_ERROR``
+outside the limits is moved onto them (MoveIt's FixStartStateBounds), as is a goal within
+``GOAL_ROUNDING`` (the limits' rounding), and the start and goal
+are checked (``valid``: in limits and collision-free under our model); valid problems are
+planned with ``MotionPlanner.plan_path`` (the checks and the
 search of ``plan_to_joints``, without the time parametrisation) and timed from request to
 validated path. Each report row has ``family``, ``problem``, ``valid``, ``success``,
 ``time_s``, ``path_length`` (joint-space L2, rad), ``path_valid_fine`` (re-checked here at
@@ -83,10 +87,24 @@ def robot_config(robot: str) -> PlanningConfig:
     return config
 
 
+START_BOUNDS_ERROR = 0.05
+"""rad (or m): a start this close outside the joint limits is moved onto them, as MoveIt's
+default planning pipeline does (its FixStartStateBounds adapter, start_state_max_bounds_error);
+MBM's Fetch starts lie up to 3e-6 rad beyond VAMP's limits of +-3.14159."""
+GOAL_ROUNDING = 1e-5
+"""rad (or m): a goal this close outside a limit is on it: the URDF's limits are rounded (VAMP's
+Fetch gives pi as 3.14159, its goals reach 3.1415925); MoveIt would refuse any goal beyond."""
+
+
 def _load(scene, problem):
     scene.load_moveit(problem.scene_file)
     q_start, q_goal, others = mbm.read_request(problem.request_file, scene.model.joint_names)
     scene.set_positions(others)
+    lower, upper = scene.lower, scene.upper
+    if np.all((q_start >= lower - START_BOUNDS_ERROR) & (q_start <= upper + START_BOUNDS_ERROR)):
+        q_start = np.clip(q_start, lower, upper)
+    if np.all((q_goal >= lower - GOAL_ROUNDING) & (q_goal <= upper + GOAL_ROUNDING)):
+        q_goal = np.clip(q_goal, lower, upper)
     return q_start, q_goal
 
 
@@ -146,15 +164,16 @@ def _path_fields(scene, path: np.ndarray) -> dict:
 def summarize(rows: list[dict]) -> str:
     """Returns the per-family table (valid, solved, median and p95 time, median length)."""
     compare = any("ompl_success" in r for r in rows)
-    head = f"{'family':24s} {'valid':>5s} {'solved':>6s} {'med ms':>8s} {'p95 ms':>8s} {'len':>6s}"
-    head += f" {'fine ok':>7s}"
+    families = list(dict.fromkeys(r["family"] for r in rows))
+    width = max([24, *map(len, families)])
+    head = f"{'family':{width}s} {'valid':>5s} {'solved':>6s} {'med ms':>8s} {'p95 ms':>8s}"
+    head += f" {'len':>6s} {'fine ok':>7s}"
     if compare:
         head += f" | {'ompl ok':>7s} {'med ms':>8s} {'p95 ms':>8s} {'len':>6s} {'fine ok':>7s}"
     lines = [head, "-" * len(head)]
-    families = list(dict.fromkeys(r["family"] for r in rows))
     for family in [*families, "all"]:
         group = [r for r in rows if family in ("all", r["family"]) and r["valid"]]
-        lines.append(f"{family:24s} {len(group):5d} " + _stats(group, compare))
+        lines.append(f"{family:{width}s} {len(group):5d} " + _stats(group, compare))
     if compare:
         lines.append(speedup(rows))
     return "\n".join(lines)

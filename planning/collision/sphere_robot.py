@@ -32,6 +32,10 @@ from planning.collision.sphere_cover import (
 SPACING = 0.01  # m, grid of candidate centres and coarse samples
 DENSE_SPACING = 0.002  # m, boundary grid that sets the final radii (eps <= 1.2 mm)
 _CELLS = 15  # grid cells along the largest extent of a held object, at most
+# Grid cells in a robot shape's bounding box, at most: a larger shape (a mobile base, a
+# pedestal) gets a coarser grid, so that its cover stays within memory and seconds (every arm
+# link seen, Panda and UR5, stays below it: at most 9,240 cells).
+_MAX_GRID_CELLS = 12_000
 # The cover algorithm's code (this module and sphere_cover): part of every cache key, so a change
 # of the algorithm builds new covers without a hand-bumped version.
 _COVER_CODE = b"".join(
@@ -71,15 +75,23 @@ def cover_shape(shape, X_BG, slack: float, *, scaled: bool = False) -> SphereSet
     Args:
         scaled: grids scale with the shape (at least ``SPACING``, at most ``_CELLS`` cells
             along its largest extent), so that large held objects stay cheap to cover.
+            Otherwise the grids are ``SPACING`` and ``DENSE_SPACING``, coarsened alike for a
+            shape whose bounding box holds more than ``_MAX_GRID_CELLS`` cells (the cover stays
+            conservative: its radii grow with the dense grid's step).
     """
     v, polygons, sphere_radius, has_inner = shape_polytope(shape)
     if sphere_radius is not None:
         cover = SphereSet(np.zeros((1, 3)), np.array([sphere_radius]), np.array([sphere_radius]))
     else:
         spacing, dense = SPACING, DENSE_SPACING
+        extent = np.ptp(v, axis=0)
         if scaled:
-            spacing = max(SPACING, float(np.ptp(v, axis=0).max()) / _CELLS)
-            dense = spacing * DENSE_SPACING / SPACING
+            spacing = max(SPACING, float(extent.max()) / _CELLS)
+        else:
+            cells = float(np.prod(np.ceil(extent / SPACING)))
+            if cells > _MAX_GRID_CELLS:
+                spacing = SPACING * (cells / _MAX_GRID_CELLS) ** (1.0 / 3.0)
+        dense = spacing * DENSE_SPACING / SPACING
         cover = cover_polytope(v, polygons, slack=slack, spacing=spacing, dense_spacing=dense)
         if not has_inner:
             cover.inner[:] = 0.0

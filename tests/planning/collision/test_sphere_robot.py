@@ -151,3 +151,17 @@ def test_held_covers_are_the_scaled_covers_and_are_cached(tmp_path, monkeypatch)
     mut.held_cover(Cylinder(0.03, 0.1), 0.015)
     mut.held_cover(Box(0.04, 0.05, 0.12), 0.03)
     assert len(list((tmp_path / "spheres").glob("held-*.npy"))) == 4
+
+
+def test_a_large_shape_gets_a_coarser_grid_and_is_still_covered():
+    """A pedestal-sized box (0.9 x 0.8 x 0.3 m: 216,000 cells at 1 cm) is covered on a coarser
+    grid, within memory, and the cover still holds every point of its surface."""
+    size = np.array([0.9, 0.8, 0.3])
+    cover = mut.cover_shape(Box(*size), RigidTransform(), slack=0.015)
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-size / 2, size / 2, (4000, 3))
+    axis = rng.integers(0, 3, len(points))
+    points[np.arange(len(points)), axis] = np.sign(rng.uniform(-1, 1, len(points))) * size[axis] / 2
+    gaps = np.linalg.norm(points[:, None] - cover.p_BS[None], axis=2) - cover.radius[None]
+    assert (gaps.min(axis=1) <= 1e-9).all()
+    assert len(cover.radius) < 2000
