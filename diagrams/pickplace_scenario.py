@@ -33,7 +33,7 @@ from drake_sim.base.resources import config_dir
 from planning.config import PlanningConfig, check_planning_config
 from planning.execution.options import InterfaceOptions
 from planning.io.scene_files import SceneFile
-from planning.model.planning_model import finger_defaults, named_configurations
+from planning.model.planning_model import finger_defaults, named_configurations, robot_model
 from planning.motion_planner import MotionPlannerOptions
 from planning.task.options import PickPlaceOptions
 
@@ -73,6 +73,13 @@ class PickPlaceScenario:
         """The station's config with the robot model, the scene and the start filled in."""
         if self.scene is None:
             raise ConfigError("scenario: no scene (load it with load_pickplace_scenario)")
+        robot = robot_model(self.robot.model)
+        if robot.name != "panda":
+            raise ConfigError(
+                f"scenario: robot.model.description {self.robot.model.description!r} is "
+                f"{robot.name}; the pick-and-place stations simulate the Panda only for now "
+                "(plan for other arms with planning.MotionPlanner: notebooks/own_arm.ipynb)"
+            )
         named = named_configurations(self.robot.model)
         q_arm = named.get(self.initial_configuration)
         if q_arm is None:

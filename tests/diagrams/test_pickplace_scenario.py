@@ -52,6 +52,16 @@ def test_bad_scenarios_name_the_key(tmp_path, text, match):
         mut.load_pickplace_scenario(write(tmp_path, text))
 
 
+def test_another_arm_is_refused_by_name_until_stations_take_it(tmp_path):
+    arm = tmp_path / "xarm7.yaml"
+    arm.write_text(
+        "urdf: package://example-robot-data/robots/xarm_description/urdf/xarm7.urdf\n"
+        "srdf: package://example-robot-data/robots/xarm_description/srdf/xarm7.srdf\n"
+    )
+    with pytest.raises(ConfigError, match="is UF_ROBOT; the pick-and-place stations simulate"):
+        mut.load_pickplace_scenario(overrides=[f"robot.model.description={arm}"])
+
+
 def test_scene_file_is_relative_to_the_scenario(tmp_path):
     (tmp_path / "scene.yaml").write_text(SCENE.read_text().replace("0.1]", "0.12]"))
     path = tmp_path / "s.yaml"
