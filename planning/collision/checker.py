@@ -214,28 +214,42 @@ def cells(q_a, q_b, resolution: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def swept_free(adapter, centres: np.ndarray, halves: np.ndarray, first=None, depth: int = 0):
-    """True for each cell (``cells``: centres, half-extents (K, D)) whose every configuration is
-    collision-free: its centre free with margins for the cell's motion (``adapter.cell_ratios``
-    above 1, or ``first``'s at this level), else, when its centre is free, its smaller cells,
-    as many as the centre's ratio says (cells that much smaller pass if their centres are as
-    far from everything), down to ``_DEPTH`` cuts (then it counts as colliding: a conservative
-    answer)."""
+    """For the cells (``cells``: centres, half-extents (K, D)) in order up to the first that is
+    not proven free: True for each whose every configuration is collision-free, False for that
+    one and all after it (not looked at: callers want the first failing segment). A cell is
+    free when its centre is free with margins for the cell's motion (``adapter.cell_ratios``
+    above 1, or ``first``'s at this level), else, when its centre is free, when its smaller
+    cells are, as many as the centre's ratio says (cells that much smaller pass if their
+    centres are as far from everything), down to ``_DEPTH`` cuts (then it counts as colliding:
+    a conservative answer)."""
     centres = np.atleast_2d(np.asarray(centres, dtype=float))
     halves = np.atleast_2d(np.asarray(halves, dtype=float))
     ratio = (first or adapter.cell_ratios)(centres, np.abs(halves))
     free = ratio > 1.0
-    split = np.flatnonzero(~free & (ratio > 0.0))  # the centres free by less than the margins
-    if not len(split) or depth >= _DEPTH:
-        return free
-    counts = np.clip(np.ceil(1.5 / ratio[split]), 2, _MAX_SPLIT).astype(int)
-    sub, small = [], []
-    for k, m in zip(split, counts, strict=True):
-        offsets = (2.0 * np.arange(m) + 1.0) / m - 1.0  # sub-centres, in (-1, 1)
-        sub.append(centres[k] + offsets[:, None] * halves[k])
-        small.append(np.tile(halves[k] / m, (m, 1)))
-    inner = swept_free(adapter, np.vstack(sub), np.vstack(small), None, depth + 1)
-    free[split] = np.logical_and.reduceat(inner, np.r_[0, np.cumsum(counts)[:-1]])
+    for k in np.flatnonzero(~free):
+        free[k] = _cut_free(adapter, centres[k], halves[k], ratio[k], depth)
+        if not free[k]:
+            free[k + 1 :] = False
+            break
     return free
+
+
+def _cut_free(adapter, centre, half, ratio: float, depth: int) -> bool:
+    """True when the cell centre +- half, whose centre's ratio (``cell_ratios``) is ``ratio``
+    (at most 1), is free by its smaller cells (``swept_free``); those nearest to something (the
+    least ratio) first: a cell that touches fails soon, without proving the others."""
+    if not (ratio > 0.0 and depth < _DEPTH):
+        return False
+    m = int(np.clip(np.ceil(1.5 / ratio), 2, _MAX_SPLIT))
+    offsets = (2.0 * np.arange(m) + 1.0) / m - 1.0  # sub-centres, in (-1, 1)
+    sub, small = centre + offsets[:, None] * half, half / m
+    ratios = adapter.cell_ratios(sub, np.tile(np.abs(small), (m, 1)))
+    for k in np.argsort(ratios):
+        if ratios[k] > 1.0:
+            return True  # the rest are larger
+        if not _cut_free(adapter, sub[k], small, ratios[k], depth + 1):
+            return False
+    return True
 
 
 class GeometrySpeed(NamedTuple):
@@ -256,14 +270,8 @@ _speeds: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def geometry_speed(scene) -> GeometrySpeed:
-    """The scene's ``GeometrySpeed``, made once per set of held objects.
-
-    A revolute joint moves a point at most its distance from the joint's axis per rad, no more
-    than its distance from the joint frame's origin: walking from a body up the tree, that is
-    at most the farthest point of the body's shapes from its origin plus the length of every
-    joint frame's offset on the way (rigid, so the same in any configuration; a prismatic
-    joint on the way adds its largest travel). A prismatic arm joint moves its points 1 m/m.
-    """
+    """The scene's ``GeometrySpeed`` (``speed_walk`` of its shapes' reach), made once per set of
+    held objects."""
     held = list(scene.attached_objects.values())
     key = tuple((o.shape, tuple(o.size), o.X_PO.GetAsMatrix34().tobytes()) for o in held)
     if scene not in _speeds:
@@ -280,13 +288,27 @@ def geometry_speed(scene) -> GeometrySpeed:
         body = int(plant.GetBodyByName(ATTACHMENT_BODY, scene.model.instance).index())
         hulls = [shape_hull(o.drake_shape(), o.X_PO) for o in held]
         reach[body] = max(reach.get(body, 0.0), _farthest(hulls))
+    rows = {body: k for k, body in enumerate(reach)}
+    made[key] = GeometrySpeed(rows, speed_walk(plant, arm, reach))
+    return made[key]
+
+
+def speed_walk(plant, arm, reach: dict) -> np.ndarray:
+    """A bound on how fast any point within ``reach[body]`` (m) of each body's origin moves per
+    unit of each arm joint (``arm``: plant position -> column), in any configuration, (B, D),
+    rows in ``reach``'s order, m/rad (m/m for a prismatic joint).
+
+    A revolute joint moves a point at most its distance from the joint's axis per rad, no more
+    than its distance from the joint frame's origin: walking from the body up the tree, that is
+    at most the point's distance from the body's origin plus the length of every joint frame's
+    offset on the way (rigid, so the same in any configuration; a weld adds its own offset, a
+    prismatic joint its largest travel, a joint of more freedoms makes it unbounded)."""
     inboard = {}
     for index in plant.GetJointIndices():
         joint = plant.get_joint(index)
         inboard[int(joint.child_body().index())] = joint
-    rows = {body: k for k, body in enumerate(reach)}
-    speed = np.zeros((len(reach), len(arm)))
-    for body, k in rows.items():
+    speed = np.zeros((len(reach), len(set(arm.values()))))
+    for k, body in enumerate(reach):
         far, b = reach[body], body
         while b in inboard:
             joint = inboard[b]
@@ -300,12 +322,13 @@ def geometry_speed(scene) -> GeometrySpeed:
                     speed[k, column] = 1.0
                 lower, upper = joint.position_lower_limits()[0], joint.position_upper_limits()[0]
                 far += max(abs(lower), abs(upper))  # inf without limits: then no bound
-            elif kind not in ("revolute", "weld"):
+            elif kind == "weld":
+                far += np.linalg.norm(joint.X_FM().translation())
+            elif kind != "revolute":
                 far = np.inf  # a joint of more freedoms: no bound here
             far += np.linalg.norm(joint.frame_on_parent().GetFixedPoseInBodyFrame().translation())
             b = int(joint.parent_body().index())
-    made[key] = GeometrySpeed(rows, speed)
-    return made[key]
+    return speed
 
 
 def _farthest(hulls) -> float:

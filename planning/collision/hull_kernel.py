@@ -56,7 +56,7 @@ class HullData(NamedTuple):
     checked against the world); ``pair`` (P, 2) the shape pairs checked against each other and
     ``pair_gap`` (P,) their least clearance, likewise; ``geom_body`` (H,) each shape's body
     (a row of ``speed``) and ``speed`` (B, D) a bound on how fast any point of each body's
-    shapes moves per rad of each arm joint, m/rad (``sphere_arrays.speed_table`` of the shapes'
+    shapes moves per rad of each arm joint, m/rad (``checker.speed_walk`` of the shapes'
     reach), for ``hull_free``'s ``motion``.
     """
 

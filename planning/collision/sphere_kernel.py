@@ -90,7 +90,7 @@ class KernelData(NamedTuple):
     an axis-aligned box around it.
     Speeds: ``speed`` (L, D), a bound on how fast any point the checks use on each body (a
     sphere's, a group's or the body's bounding centre) moves per rad of each arm joint, m/rad,
-    in any configuration (``sphere_arrays.speed_table``; inf: no bound, so no certificates).
+    in any configuration (``checker.speed_walk``; inf: no bound, so no certificates).
     Roots, for the certificates' clearances: ``env_reach``, ``env_out_root``,
     ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, ``pair_side_reach``, the square
     roots of ``env_reach2``, ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out``,

@@ -33,6 +33,7 @@ import numpy as np
 from pydrake.multibody.tree import BodyIndex
 
 from planning.collision import sphere_kernel as _kernel
+from planning.collision.checker import speed_walk
 from planning.collision.hull_kernel import HullData, prove_free_packed
 from planning.collision.sphere_arrays import (
     Filters,
@@ -42,7 +43,6 @@ from planning.collision.sphere_arrays import (
     primitives,
     robot_arrays,
     shape_reach,
-    speed_table,
 )
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
@@ -172,25 +172,30 @@ class SphereCollisionModel:
         arm = np.asarray(self._arm, dtype=np.int64)
         # The kernels run the tree with its fixed steps folded away (the fingers too, at the
         # template's positions): the points those steps carried move into the frames of the
-        # steps that carry them now, at most their offset's translation farther from those
-        # frames' origins (which the speed bounds take in).
+        # steps that carry them now.
         tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
         arrays = dict(self._robot_arrays)
-        shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])
-        point_norm = self._point_norm + shift[arrays["body_step"]]
-        # The exact shapes' points: farther out than the spheres' centres (``shape_reach``), and
-        # within the spheres, which contain them (a bound that holds if the cover is loose).
-        reach = np.maximum(self._shape_reach, self._sphere_reach) + shift[arrays["body_step"]]
+        # Speed bounds walked up the plant's tree (``checker.speed_walk``; 1.4x tighter on the
+        # Panda than ``sphere_arrays.speed_table``'s on the folded tree): of the points the
+        # checks use, and of the exact shapes' points, farther out than the spheres' centres
+        # (``shape_reach``) and within the spheres, which contain them (if the cover is loose).
+        columns, plant, present = (
+            {int(k): j for j, k in enumerate(arm)},
+            self._scene.plant,
+            self._present,
+        )
+        speed = speed_walk(plant, columns, dict(zip(present, self._point_norm, strict=True)))
+        reach = np.maximum(self._shape_reach, self._sphere_reach)
+        geometry_speed = speed_walk(plant, columns, dict(zip(present, reach, strict=True)))
         for steps, points in _FOLDED:
             arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
-        geometry_speed = speed_table(*tree, template, arm, arrays["body_step"], reach)
         self._hull_data = folded_hulls(self._hull_raw, offsets, geometry_speed)
         return dict(
             zip(("parent", "kind", "q_index", "terms"), tree, strict=True),
             template=template,
             arm=arm,
             **arrays,
-            speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
+            speed=np.ascontiguousarray(speed),
             **{name: np.sqrt(np.maximum(arrays[squared], 0.0)) for name, squared in _ROOTS.items()},
         )
 

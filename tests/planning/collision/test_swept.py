@@ -158,7 +158,15 @@ def test_a_cell_failing_by_its_margin_alone_is_cut(scene, monkeypatch):
     monkeypatch.setattr(adapter, "cell_ratios", by_size)
     half = np.full((1, 7), 0.005)
     assert mut.swept_free(adapter, q[None], half).all()
-    assert calls == [1, 3, 9]  # the cell; 3 (ceil(1.5 / 0.5)) of 1.7 mrad; 9 of 0.56 mrad
+    assert calls == [1, 3, 3, 3, 3]  # the cell; 3 (ceil(1.5 / 0.5)) of 1.7 mrad; 3 in each
+    calls.clear()  # cells in order, up to the first that fails
+    ratios = iter([[0.0, 2.0, 0.0]])
+    monkeypatch.setattr(adapter, "cell_ratios", lambda c, motion: np.array(next(ratios)))
+    assert list(mut.swept_free(adapter, np.vstack([q, q, q]), np.vstack([half] * 3))) == [
+        False,
+        False,
+        False,
+    ]
     monkeypatch.setattr(adapter, "cell_ratios", lambda c, motion: np.zeros(len(c)))
     assert not mut.swept_free(adapter, q[None], half).any()
 
