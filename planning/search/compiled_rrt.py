@@ -27,9 +27,9 @@ free, not only its samples: an independent audit (``drake_sim.tools.path_audit``
 the 696 MBM Panda paths touching an obstacle between the samples of the point check (up to
 0.6 mm deep), and none with the cells. The cells the spheres leave UNKNOWN go to the exact
 shapes with the same margins, then are cut into smaller cells (``_cells_free``), and only those
-still unproven go to Drake (``checker.swept_free``). All this costs about 0.8 ms a path on
-MBM (the sphere cover grazes obstacles along the search's edges, so about one cell in seven
-needs the exact shapes).
+still unproven go to Drake (``checker.swept_free``). On MBM's box scenes this check takes
+0.72 ms a path against 0.20 for the samples alone: the sphere cover grazes obstacles along the
+search's edges, so about one cell in ten needs the exact shapes.
 
 ``plan`` gives up after ``max_checks`` classified configurations (a count, not a time, so a
 seed gives the same path on any machine); then, or when the fine check finds a collision, the
