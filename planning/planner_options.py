@@ -132,6 +132,11 @@ class ValidationOptions:
     # checks of 0.01 (66.6k against 160.1k) and repaired all 50 (0.01 left two to the Python
     # pipeline), the median path no longer (5.08 against 5.10 rad).
     repair_resolution: float = 0.03
+    # True: the path is valid along its whole length, not only at its samples: each sample
+    # stands for the cell around it, checked with margins for how far the robot may move
+    # within it (``planning.collision.checker.swept_free``). False: the samples alone, as
+    # before (for comparisons; MBM Panda paths then touched obstacles between samples).
+    swept: bool = True
 
     def check(self, prefix: str = "validation") -> None:
         """Raises ValueError naming the first field out of range."""
@@ -140,6 +145,7 @@ class ValidationOptions:
         _count(self.max_repairs, f"{prefix}.max_repairs", least=0)
         _positive(self.repair_timeout, f"{prefix}.repair_timeout")
         _positive(self.repair_step, f"{prefix}.repair_step")
+        _flag(self.swept, f"{prefix}.swept")
         field = f"{prefix}.repair_resolution"
         _finite(self.repair_resolution, field, "finite and > 0 rad", zero_ok=False)
 

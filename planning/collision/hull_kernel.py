@@ -54,7 +54,10 @@ class HullData(NamedTuple):
     ``geom_bound`` (H,) a sphere containing the shape; ``geom_world`` (H,) the least clearance
     to prove against every world object (its padding, at least 0, plus ``MARGIN``; -1: not
     checked against the world); ``pair`` (P, 2) the shape pairs checked against each other and
-    ``pair_gap`` (P,) their least clearance, likewise.
+    ``pair_gap`` (P,) their least clearance, likewise; ``geom_body`` (H,) each shape's body
+    (a row of ``speed``) and ``speed`` (B, D) a bound on how fast any point of each body's
+    shapes moves per rad of each arm joint, m/rad (``checker.speed_walk`` of the shapes'
+    reach), for ``hull_free``'s ``motion``.
     """
 
     geom_step: np.ndarray
@@ -66,6 +69,8 @@ class HullData(NamedTuple):
     geom_world: np.ndarray
     pair: np.ndarray
     pair_gap: np.ndarray
+    geom_body: np.ndarray
+    speed: np.ndarray
 
 
 @njit(cache=True)
@@ -81,6 +86,8 @@ def unpack_hulls(f, i):
         _v1(f, i, 6),
         _v2(i, i, 7),
         _v1(f, i, 8),
+        _v1(i, i, 9),
+        _v2(f, i, 10),
     )
 
 
@@ -310,13 +317,34 @@ def _apart(h, g, other, obj, T, gap, P, v):
 
 
 @njit(cache=True, _nrt=False)
-def _shapes_free(h, objects, T, P, v, none):
-    """True when every checked pair of the posed shapes (transforms T) is provably apart;
+def _motion_gap(h, a, b, motion):
+    """How far, m, shape a's points (b < 0) or the distances between shapes a's and b's may
+    change while the arm moves by at most ``motion[j]`` rad in each joint j (empty: none);
+    see ``sphere_kernel.motion_margins``."""
+    total = 0.0
+    body_a = h.geom_body[a]
+    for j in range(len(motion)):
+        if motion[j] <= 0.0:
+            continue
+        if b < 0:
+            total += h.speed[body_a, j] * motion[j]
+            continue
+        body_b = h.geom_body[b]
+        if not (h.speed[body_a, j] > 0.0 and h.speed[body_b, j] > 0.0):
+            total += (h.speed[body_a, j] + h.speed[body_b, j]) * motion[j]
+    return total
+
+
+@njit(cache=True, _nrt=False)
+def _shapes_free(h, objects, T, P, v, none, motion):
+    """True when every checked pair of the posed shapes (transforms T) is provably apart, by
+    its clearance plus how much the arm's ``motion`` may close it (``_motion_gap``);
     ``none`` is an object row that no robot pair reads."""
     for g in range(len(h.geom_step)):
         gap = h.geom_world[g]
         if gap < 0.0:
             continue
+        gap += _motion_gap(h, g, -1, motion)
         x, y, z = _centre(h, g, T)
         reach = h.geom_bound[g] + gap
         for o in range(len(objects)):
@@ -327,7 +355,7 @@ def _shapes_free(h, objects, T, P, v, none):
     for p in range(len(h.pair)):
         g = h.pair[p, 0]
         e = h.pair[p, 1]
-        gap = h.pair_gap[p]
+        gap = h.pair_gap[p] + _motion_gap(h, g, e, motion)
         ax, ay, az = _centre(h, g, T)
         bx, by, bz = _centre(h, e, T)
         dx, dy, dz = ax - bx, ay - by, az - bz
@@ -355,35 +383,38 @@ def hull_scratch(d):
 
 
 @njit(cache=True, _nrt=False)
-def hull_free(q, d, h, scratch):
-    """True when the arm configuration q (7,) is provably collision-free for Drake's checker:
-    every pair it checks more than its padding plus ``MARGIN`` apart. ``d`` is the sphere
-    model's ``KernelData`` (kinematics, world objects), ``h`` its ``HullData``, ``scratch``
-    ``hull_scratch(d)``."""
+def hull_free(q, d, h, scratch, motion):
+    """True when the arm configuration q (D,) is provably collision-free for Drake's checker:
+    every pair it checks more than its padding plus ``MARGIN`` apart, and more by what
+    ``motion`` (D,) may close it (empty: nothing): then every configuration within motion[j]
+    rad of q in each joint j is free too. ``d`` is the sphere model's ``KernelData``
+    (kinematics, world objects), ``h`` its ``HullData``, ``scratch`` ``hull_scratch(d)``."""
     full, sines, cosines, T, P, v, none = scratch
     for k in range(len(q)):
         if not np.isfinite(q[k]):
             return False
         full[d.arm[k]] = q[k]
     _pose_chain_lanes(full, sines, cosines, d.parent, d.kind, d.q_index, d.terms, T)
-    return _shapes_free(h, d.objects, T, P, v, none)
+    return _shapes_free(h, d.objects, T, P, v, none, motion)
 
 
 @njit(cache=True)
-def prove_free(qs, d, h):
-    """``hull_free`` of each row of qs (N, 7): a bool array."""
+def prove_free(qs, d, h, motion):
+    """``hull_free`` of each row of qs (N, D) with the row of ``motion`` (N, D; (0, D): none):
+    a bool array."""
     scratch = hull_scratch(d)
     out = np.zeros(len(qs), dtype=np.bool_)
+    none = np.zeros(0)
     for n in range(len(qs)):
-        out[n] = hull_free(qs[n], d, h, scratch)
+        out[n] = hull_free(qs[n], d, h, scratch, motion[n] if len(motion) else none)
     return out
 
 
 @njit(cache=True)
-def prove_free_packed(qs, floats, ints, hull_floats, hull_ints):
+def prove_free_packed(qs, floats, ints, hull_floats, hull_ints, motion):
     """``prove_free`` with the ``KernelData`` and the ``HullData`` packed
-    (``sphere_kernel.pack``): four arrays to pass from Python instead of 44."""
-    return prove_free(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints))
+    (``sphere_kernel.pack``): five arrays to pass from Python instead of 47."""
+    return prove_free(qs, unpack(floats, ints), unpack_hulls(hull_floats, hull_ints), motion)
 
 
 # Numba keys a cached function on its own file alone; these compile the kernel's code (its

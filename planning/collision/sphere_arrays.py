@@ -186,9 +186,10 @@ def robot_arrays(sets, groups_of, step, slot, filters: Filters) -> RobotArrays:
 
 
 def hull_arrays(shapes, step, slot, filters: Filters) -> dict:
-    """``HullData``'s fields, on the kinematic steps before folding: each robot shape's step,
-    vertices, swept radius and bounding sphere, its clearance to prove to the world (-1:
-    filtered), and the shape pairs of the body pairs the checker checks (``filters``).
+    """``HullData``'s fields but ``speed``, on the kinematic steps before folding: each robot
+    shape's step, vertices, swept radius and bounding sphere, its clearance to prove to the
+    world (-1: filtered), its body (the position in ``shapes``), and the shape pairs of the body
+    pairs the checker checks (``filters``).
 
     Args:
         shapes: {body: [(vertices (V, 3), swept radius)]}, the bodies in the model's order;
@@ -197,7 +198,8 @@ def hull_arrays(shapes, step, slot, filters: Filters) -> dict:
     filtered, padding, world_body, checked = filters
     present = list(shapes)
     geom_step, verts, radius, centre, bound, world, owner = [], [], [], [], [], [], []
-    for b in present:
+    geom_body = []
+    for k, b in enumerate(present):
         for v, r in shapes[b]:
             c = v.mean(axis=0)
             geom_step.append(step[slot[b]])
@@ -208,6 +210,7 @@ def hull_arrays(shapes, step, slot, filters: Filters) -> dict:
             pad = max(padding[b, world_body], 0.0) + HULL_MARGIN
             world.append(pad if filtered[b, world_body] == 0 else -1.0)
             owner.append(b)
+            geom_body.append(k)
     owner = np.array(owner, dtype=np.int64)
     pairs, gaps = [], []
     for a, b in sorted(checked):
@@ -226,21 +229,34 @@ def hull_arrays(shapes, step, slot, filters: Filters) -> dict:
         geom_world=np.array(world, dtype=float),
         pair=np.array(pairs, dtype=np.int64).reshape(-1, 2),
         pair_gap=np.array(gaps, dtype=float),
+        geom_body=np.array(geom_body, dtype=np.int64),
     )
 
 
-def folded_hulls(raw: dict, offsets) -> HullData:
+def shape_reach(shapes) -> np.ndarray:
+    """How far from each body's origin any point of its shapes lies, m, (B,): the farthest
+    vertex plus the swept radius (``hull_arrays``' ``shapes``; 0 for a body without any)."""
+    return np.array(
+        [
+            max((float(np.linalg.norm(v, axis=1).max()) + r for v, r in shapes[b]), default=0.0)
+            for b in shapes
+        ]
+    )
+
+
+def folded_hulls(raw: dict, offsets, speed: np.ndarray) -> HullData:
     """``HullData`` of ``hull_arrays``' fields ``raw``, moved onto the folded tree's steps
-    (``sphere_fk.fold_fixed_steps``' ``offsets``)."""
+    (``sphere_fk.fold_fixed_steps``' ``offsets``), with the shapes' speed bounds ``speed``
+    (B, D)."""
     counts = np.diff(raw["vert_start"])
     _, vert = fold_points(offsets, np.repeat(raw["geom_step"], counts), raw["vert"])
     geom_step, centre = fold_points(offsets, raw["geom_step"], raw["geom_centre"])
-    fields = dict(raw, geom_step=geom_step, vert=vert, geom_centre=centre)
+    fields = dict(raw, geom_step=geom_step, vert=vert, geom_centre=centre, speed=speed)
     return HullData(**{k: np.ascontiguousarray(v) for k, v in fields.items()})
 
 
 def speed_table(parent, kind, q_index, terms, template, arm, body_step, point_norm):
-    """A bound on the speed of the points of each body per rad of each arm joint, (L, 7), m/rad,
+    """A bound on the speed of the points of each body per rad of each arm joint, (L, D), m/rad,
     valid in every configuration (``KernelData.speed``).
 
     Step s of the tree maps a point p of its child frame to X_PC(q) [p; 1] with

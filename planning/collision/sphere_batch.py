@@ -34,7 +34,7 @@ from numba import njit
 
 from planning.collision import lane_geometry, sphere_kernel, trig
 from planning.collision.lane_geometry import centre_once, min_distance2, points, within
-from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, refresh_cache
+from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, motion_margins, refresh_cache
 from planning.collision.trig import sincos_lanes
 
 # Configurations per batch, at most. The loops over lanes run to a count known only at run time,
@@ -98,12 +98,12 @@ def _verdicts(flags, verdict, lanes):
 
 
 @njit(cache=True, _nrt=False)
-def classify_batch(qs, count, d, work, mode, excused, verdict):
+def classify_batch(qs, count, d, work, mode, excused, verdict, margin):
     """Classifies the arm configurations ``qs[:count]`` (rows, rad; 1 <= count <= the lanes
-    of ``work``).
+    of ``work``), each threshold that proves a lane free widened by ``margin``.
 
     Args:
-        qs: (>= count, 7) configurations.
+        qs: (>= count, D) configurations.
         count: how many rows to classify.
         d: the sphere model's ``KernelData``.
         work: ``batch_work(d, lanes)`` with lanes >= count.
@@ -113,6 +113,11 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         verdict: (>= count,) int64 out: FREE, COLLIDING or UNKNOWN for the first ``count`` lanes;
             after an early stop, the verdicts of the tests done so far (a lane shown FREE then
             may not be).
+        margin: (L + Q,) m, or empty: none. A lane is FREE only when each body's spheres are
+            ``margin[b]`` farther from the objects than they need be, and each checked body
+            pair's ``margin[L + p]`` farther apart (``sphere_kernel.motion_margins``: then
+            every configuration within that motion of the lane is free too). COLLIDING is not
+            widened: it stays a proof about the lane itself.
 
     Returns:
         True when a lane blocks (FIRST_BLOCK mode; in FULL mode, when every lane collides).
@@ -199,8 +204,10 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
     # object, not 6 a lane).
     objects = d.objects
     n_obj = len(objects)
+    widen = len(margin) > 0
+    bodies_count = len(d.body_step)
     for body in range(len(d.body_step)):
-        reach = d.body_reach[body]
+        reach = d.body_reach[body] + (margin[body] if widen else 0.0)
         x = bodies[body, 0]
         y = bodies[body, 1]
         z = bodies[body, 2]
@@ -238,6 +245,9 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         for i in range(count_near):
             min_distance2(groups[g], objects[near[body, i]], dist, lanes)
         reach2 = d.env_reach2[e]
+        extra = margin[body] if widen else 0.0
+        if extra > 0.0:
+            reach2 = (d.env_reach[e] + extra) ** 2
         any_near = False
         for lane in range(lanes):
             inside = dist[lane] < reach2
@@ -255,6 +265,8 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
                 min_distance2(centres[c], objects[near[body, i]], best, lanes)
             inner2 = d.env_in[e, k]
             outer2 = d.env_out[e, k]
+            if extra > 0.0:
+                outer2 = (d.env_out_root[e, k] + extra) ** 2
             for lane in range(lanes):
                 if mask[lane] > 0.0:
                     colliding[lane] |= best[lane] < inner2
@@ -269,6 +281,9 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
         a_body = d.body_pair[p, 0]
         b_body = d.body_pair[p, 1]
         reach2 = d.body_pair_reach2[p]
+        extra = margin[bodies_count + p] if widen else 0.0
+        if extra > 0.0:
+            reach2 = (d.body_pair_reach[p] + extra) ** 2
         any_near = False
         for lane in range(lanes):
             u = bodies[a_body, 0, lane] - bodies[b_body, 0, lane]
@@ -288,12 +303,17 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
                 last = ga
                 centre_once(T, d.group_step, d.p_BG, ga, groups, group_seen, now, lanes)
                 reach2 = d.pair_side_reach2[k]
+                if extra > 0.0:
+                    reach2 = (d.pair_side_reach[k] + extra) ** 2
                 side_near = within(groups[ga], bodies[b_body], reach2, mask, side_mask, lanes)
             if not side_near:
                 continue
             gb = d.pair_group[k, 1]
             centre_once(T, d.group_step, d.p_BG, gb, groups, group_seen, now, lanes)
-            if not within(groups[ga], groups[gb], d.pair_reach2[k], side_mask, pair_mask, lanes):
+            reach2 = d.pair_reach2[k]
+            if extra > 0.0:
+                reach2 = (d.pair_reach[k] + extra) ** 2
+            if not within(groups[ga], groups[gb], reach2, side_mask, pair_mask, lanes):
                 continue
             for n in range(d.pair_a.shape[1]):
                 if d.pair_out[k, n] < 0.0:
@@ -304,6 +324,8 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
                 centre_once(T, d.sphere_step, d.p_BS, j, centres, seen, now, lanes)
                 inner2 = d.pair_in[k, n]
                 outer2 = d.pair_out[k, n]
+                if extra > 0.0:
+                    outer2 = (d.pair_out_root[k, n] + extra) ** 2
                 for lane in range(lanes):
                     u = centres[i, 0, lane] - centres[j, 0, lane]
                     v = centres[i, 1, lane] - centres[j, 1, lane]
@@ -320,10 +342,12 @@ def classify_batch(qs, count, d, work, mode, excused, verdict):
 
 
 @njit(cache=True)
-def classify_many(qs, d):
-    """FREE, COLLIDING or UNKNOWN for each row of qs (N, 7), rad: ``classify_batch`` in FULL
+def classify_many(qs, d, motion):
+    """FREE, COLLIDING or UNKNOWN for each row of qs (N, D), rad: ``classify_batch`` in FULL
     mode, ``LANES`` rows per call (the scalar kernel's verdicts, about three times faster per
-    configuration); an int8 array (N,)."""
+    configuration); an int8 array (N,). ``motion`` (N, D) rad, or (0, D): none; FREE then
+    also says that every configuration within motion[n, j] of row n in each joint j is free
+    (``sphere_kernel.motion_margins``; a batch takes the largest margins of its rows)."""
     out = np.empty(len(qs), dtype=np.int8)
     if len(qs) == 0:
         return out
@@ -332,10 +356,19 @@ def classify_many(qs, d):
     batch = np.empty((lanes, qs.shape[1]))
     verdict = np.empty(lanes, dtype=np.int64)
     excused = np.zeros(lanes, dtype=np.bool_)  # FULL mode reads none
+    swept = len(motion) > 0
+    margin = np.zeros(len(d.body_step) + len(d.body_pair) if swept else 0)
+    row = np.empty(len(margin))
     for start in range(0, len(qs), lanes):
         fill = min(lanes, len(qs) - start)
         batch[:fill] = qs[start : start + fill]
-        classify_batch(batch, fill, d, work, FULL, excused, verdict)
+        if swept:
+            margin[:] = 0.0
+            for lane in range(fill):
+                motion_margins(motion[start + lane], d.speed, d.body_pair, row)
+                for k in range(len(row)):
+                    margin[k] = max(margin[k], row[k])
+        classify_batch(batch, fill, d, work, FULL, excused, verdict, margin)
         for lane in range(fill):
             out[start + lane] = verdict[lane]
     return out

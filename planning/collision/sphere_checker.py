@@ -36,7 +36,8 @@ def sphere_model(scene, slack: float = 0.015) -> SphereCollisionModel:
 
 
 class SphereCheckerAdapter(CheckerAdapter):
-    """7-joint collision queries on a ``PlanningScene``: sphere models, Drake when unsure.
+    """Collision queries of the arm's joints on a ``PlanningScene``: sphere models, Drake when
+    unsure.
 
     Args:
         scene: the planning scene.
@@ -87,32 +88,68 @@ class SphereCheckerAdapter(CheckerAdapter):
     def config_free(self, q) -> bool:
         return bool(self.configs_free(np.asarray(q, dtype=float)[None, :])[0])
 
-    def configs_free(self, qs) -> np.ndarray:
-        """Checks many configurations (rows of qs); returns a bool array."""
+    def configs_free(self, qs, motion=None) -> np.ndarray:
+        """Checks many configurations (rows of qs); returns a bool array. ``motion`` (rows, rad
+        per joint): a row is free only when every configuration within that motion of it is
+        free too (see ``CheckerAdapter.configs_free``)."""
         qs = np.atleast_2d(np.asarray(qs, dtype=float))
-        state = self._model.classify(qs)
+        if motion is not None:
+            motion = np.array(np.broadcast_to(motion, qs.shape), dtype=float)
+        state = self._model.classify(qs, motion)
         free = state == FREE
         unknown = np.flatnonzero(state == UNKNOWN)
         self.counts["spheres"] += len(qs) - len(unknown)
         if len(unknown) and self._fallback():
-            free[unknown] = self.undecided_free(qs[unknown])
+            more = None if motion is None else motion[unknown]
+            free[unknown] = self.undecided_free(qs[unknown], more)
         return free
 
-    def undecided_free(self, qs: np.ndarray) -> np.ndarray:
+    def cell_ratios(self, qs, motion) -> np.ndarray:
+        """As ``CheckerAdapter.cell_ratios``, the models first: inf for a row they prove free
+        with the margins of its ``motion``, 0 for one the spheres prove colliding; Drake's
+        ratio for the others."""
+        qs = np.atleast_2d(np.asarray(qs, dtype=float))
+        motion = np.array(np.broadcast_to(motion, qs.shape), dtype=float)
+        state = self._model.classify(qs, motion)
+        ratio = np.where(state == FREE, np.inf, 0.0)
+        unknown = np.flatnonzero(state == UNKNOWN)
+        self.counts["spheres"] += len(qs) - len(unknown)
+        if not len(unknown):
+            return ratio
+        q, m = qs[unknown], motion[unknown]
+        proven = self._model.prove_free(q, m) if self._hulls else np.zeros(len(q), bool)
+        ask = ~proven
+        if self._refine is not None and self._refine.active and ask.any():
+            refined = self._refine.classify(q[ask], m[ask])
+            proven[ask] = refined == FREE
+            ask[ask] = refined == UNKNOWN
+        ratio[unknown[proven]] = np.inf
+        self.counts["spheres"] += int(len(q) - ask.sum())
+        self.counts["drake"] += int(ask.sum())
+        if ask.any():
+            ratio[unknown[ask]] = super().cell_ratios(q[ask], m[ask])
+        return ratio
+
+    def undecided_free(self, qs: np.ndarray, motion=None) -> np.ndarray:
         """Decides configurations the first cover cannot (rows of qs; a bool array): the
         robot's exact shapes first (``SphereCollisionModel.prove_free``), then the tighter
-        cover (when there is one), Drake for the rest; counts them."""
-        free = self._model.prove_free(qs) if self._hulls else np.zeros(len(qs), dtype=bool)
+        cover (when there is one), Drake for the rest; counts them. ``motion`` as
+        ``configs_free``'s: each of them then proves the row free with margins for it."""
+        if motion is not None:
+            motion = np.array(np.broadcast_to(motion, qs.shape), dtype=float)
+        free = self._model.prove_free(qs, motion) if self._hulls else np.zeros(len(qs), bool)
         ask = ~free
         if self._refine is not None and self._refine.active and ask.any():
-            state = self._refine.classify(qs[ask])
+            state = self._refine.classify(qs[ask], None if motion is None else motion[ask])
             free[ask] = state == FREE
             ask[ask] = state == UNKNOWN
         self.counts["spheres"] += int(len(qs) - ask.sum())
         self.counts["drake"] += int(ask.sum())
         if not ask.any():
             return free
-        if ask.sum() <= _SERIAL:  # the parallel call costs more for a few configurations
+        if motion is not None:
+            free[ask] = super().configs_free(qs[ask], motion[ask])
+        elif ask.sum() <= _SERIAL:  # the parallel call costs more for a few configurations
             checker = self._checker
             free[ask] = [checker.CheckConfigCollisionFree(self.full(q)) for q in qs[ask]]
         else:

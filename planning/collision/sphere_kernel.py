@@ -71,7 +71,7 @@ class KernelData(NamedTuple):
     Kinematics: ``parent`` (J,) step of each step's parent (-1: world), ``kind`` (J,) 0 weld,
     1 revolute, 2 prismatic, ``q_index`` (J,) plant position of its joint, ``terms``
     (J, 3, 3, 4) A, B, C above, ``template`` (nq,) the plant positions of the joints other
-    than the arm's, ``arm`` (7,) the arm's position indices.
+    than the arm's, ``arm`` (D,) the arm's position indices (D: the arm's joints, any number).
     Spheres: ``sphere_step`` (S,), ``p_BS`` (S, 3). Bodies: ``body_step`` (L,), ``p_BL``
     (L, 3) centre of a sphere around the body's groups, ``body_reach`` (L,) its radius plus
     the body's world padding. Groups: ``group_step`` (G,), ``p_BG`` (G, 3) centres.
@@ -88,9 +88,9 @@ class KernelData(NamedTuple):
     1 cylinder, 2 sphere), W = R_WO^T (row-major), offset = R_WO^T p_WO, its sizes (box: half
     sizes; cylinder: radius, half length; sphere: radius) and the lower and upper corners of
     an axis-aligned box around it.
-    Speeds: ``speed`` (L, 7), a bound on how fast any point the checks use on each body (a
+    Speeds: ``speed`` (L, D), a bound on how fast any point the checks use on each body (a
     sphere's, a group's or the body's bounding centre) moves per rad of each arm joint, m/rad,
-    in any configuration (``sphere_arrays.speed_table``; inf: no bound, so no certificates).
+    in any configuration (``checker.speed_walk``; inf: no bound, so no certificates).
     Roots, for the certificates' clearances: ``env_reach``, ``env_out_root``,
     ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, ``pair_side_reach``, the square
     roots of ``env_reach2``, ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out``,
@@ -398,7 +398,7 @@ def _band(d2, inner2, outer2):
 
 @njit(cache=True, _nrt=False, inline="always")
 def _classify_one(q, d, stop_at_unknown, work, lam):
-    """(verdict, radius) for the arm configuration q (7,): FREE, COLLIDING or UNKNOWN, and for
+    """(verdict, radius) for the arm configuration q (D,): FREE, COLLIDING or UNKNOWN, and for
     a FREE one how far (rad, joint-space L2) q may move along a direction whose bodies' speed
     bounds are ``lam`` (L + Q,), m per rad (``edge_speeds``), with every sphere staying FREE
     (inf when nothing moves; 0 for a verdict other than FREE). With ``stop_at_unknown``,
@@ -684,6 +684,32 @@ def edge_speeds(q_a, q_b, d, lam):
 
 
 @njit(cache=True, _nrt=False)
+def motion_margins(motion, speed, body_pair, out):
+    """Fills ``out`` (L + Q,) with how far, m, each body's points may move (rows of ``speed``,
+    ``KernelData.speed`` or ``HullData.speed``), then how much the distances between each
+    pair's (``body_pair`` (Q, 2)) may shrink, while the arm moves by at most ``motion[j]``
+    rad in each joint j (``edge_speeds``' bounds times a displacement; a joint that moves both
+    bodies of a pair does not count for it). Validating a configuration with these added to
+    its clearances validates every configuration within ``motion`` of it
+    (``compiled_rrt._fine_check``). A joint of infinite speed (no bound) that moves gives inf."""
+    bodies = len(speed)
+    for b in range(bodies):
+        total = 0.0
+        for j in range(len(motion)):
+            if motion[j] > 0.0:
+                total += speed[b, j] * motion[j]
+        out[b] = total
+    for p in range(len(body_pair)):
+        a = body_pair[p, 0]
+        b = body_pair[p, 1]
+        total = 0.0
+        for j in range(len(motion)):
+            if motion[j] > 0.0 and not (speed[a, j] > 0.0 and speed[b, j] > 0.0):
+                total += (speed[a, j] + speed[b, j]) * motion[j]
+        out[bodies + p] = total
+
+
+@njit(cache=True, _nrt=False)
 def _near_any(q, anchors, radius):
     """True when q is within ``radius`` (joint-space L2) of a row of ``anchors``."""
     for k in range(len(anchors)):
@@ -700,14 +726,14 @@ def edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius
     """Checks the samples t = i/n, i = 1..n, n = max(1, ceil(|q_b - q_a| / step)), of the
     segment q_a -> q_b in order and returns (first, n): the index of the first blocking sample
     (sample t = (first + 1) / n; n when none blocks). UNKNOWN blocks too, but within
-    ``anchor_radius`` (rad) of one of the ``anchors`` (K, 7): configurations Drake has found
+    ``anchor_radius`` (rad) of one of the ``anchors`` (K, D): configurations Drake has found
     free (a search's start and goal), whose neighbours the spheres often cannot decide; a
     caller that lets those through must ask Drake about them later. The end sample, which may
     become a waypoint, passes that way only when it is an anchor itself.
 
     A FREE sample certifies every sample within its radius (``_classify_one``), which are
     then skipped: in free space one check stands for many. ``lam``, ``q`` are scratch
-    arrays (L + Q,), (7,); ``counter[0]`` counts the configurations classified."""
+    arrays (L + Q,), (D,); ``counter[0]`` counts the configurations classified."""
     length = edge_speeds(q_a, q_b, d, lam)
     if not np.isfinite(length):
         return 0, 1

@@ -33,6 +33,7 @@ import numpy as np
 from pydrake.multibody.tree import BodyIndex
 
 from planning.collision import sphere_kernel as _kernel
+from planning.collision.checker import speed_walk
 from planning.collision.hull_kernel import HullData, prove_free_packed
 from planning.collision.sphere_arrays import (
     Filters,
@@ -41,7 +42,7 @@ from planning.collision.sphere_arrays import (
     hull_arrays,
     primitives,
     robot_arrays,
-    speed_table,
+    shape_reach,
 )
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
@@ -171,21 +172,30 @@ class SphereCollisionModel:
         arm = np.asarray(self._arm, dtype=np.int64)
         # The kernels run the tree with its fixed steps folded away (the fingers too, at the
         # template's positions): the points those steps carried move into the frames of the
-        # steps that carry them now, at most their offset's translation farther from those
-        # frames' origins (which the speed bounds take in).
+        # steps that carry them now.
         tree, offsets = fold_fixed_steps(*self._kin.arrays(), template, arm)
         arrays = dict(self._robot_arrays)
-        shift = np.array([np.linalg.norm(X[:3, 3]) for _, X in offsets])
-        point_norm = self._point_norm + shift[arrays["body_step"]]
+        # Speed bounds walked up the plant's tree (``checker.speed_walk``; 1.4x tighter on the
+        # Panda than ``sphere_arrays.speed_table``'s on the folded tree): of the points the
+        # checks use, and of the exact shapes' points, farther out than the spheres' centres
+        # (``shape_reach``) and within the spheres, which contain them (if the cover is loose).
+        columns, plant, present = (
+            {int(k): j for j, k in enumerate(arm)},
+            self._scene.plant,
+            self._present,
+        )
+        speed = speed_walk(plant, columns, dict(zip(present, self._point_norm, strict=True)))
+        reach = np.maximum(self._shape_reach, self._sphere_reach)
+        geometry_speed = speed_walk(plant, columns, dict(zip(present, reach, strict=True)))
         for steps, points in _FOLDED:
             arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
-        self._hull_data = folded_hulls(self._hull_raw, offsets)
+        self._hull_data = folded_hulls(self._hull_raw, offsets, geometry_speed)
         return dict(
             zip(("parent", "kind", "q_index", "terms"), tree, strict=True),
             template=template,
             arm=arm,
             **arrays,
-            speed=speed_table(*tree, template, arm, arrays["body_step"], point_norm),
+            speed=np.ascontiguousarray(speed),
             **{name: np.sqrt(np.maximum(arrays[squared], 0.0)) for name, squared in _ROOTS.items()},
         )
 
@@ -208,6 +218,12 @@ class SphereCollisionModel:
         robot = robot_arrays(sets, self._body_groups, step, slot, filters)
         self._slot, self._sphere_body = robot.sphere_slot, robot.sphere_body
         self._radius, self._point_norm = robot.radius, robot.point_norm
+        self._shape_reach = shape_reach(shapes)
+        p_BS = robot.arrays["p_BS"]
+        ends = np.linalg.norm(p_BS, axis=1) + robot.radius  # each sphere's farthest point
+        self._sphere_reach = np.zeros(len(present))
+        np.maximum.at(self._sphere_reach, robot.sphere_body, ends)
+        self._present = present
         self._robot_arrays = robot.arrays
 
     def _body_groups(self, body: int, spheres: SphereSet):
@@ -292,7 +308,7 @@ class SphereCollisionModel:
 
     # -------------------------------------------------------------------------- queries ----
     def sphere_centres(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Returns the spheres' centres p_WS (N, S, 3) for configurations qs (N, 7) and their
+        """Returns the spheres' centres p_WS (N, S, 3) for configurations qs (N, D) and their
         outer radii (S,), m."""
         self.sync()
         T = self._transforms(np.atleast_2d(qs))  # (K, N, 4, 4)
@@ -306,23 +322,35 @@ class SphereCollisionModel:
         full[:, self._arm] = qs
         return self._kin.transforms(full)
 
-    def classify(self, qs) -> np.ndarray:
-        """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, 7), rad."""
+    def classify(self, qs, motion=None) -> np.ndarray:
+        """Returns FREE, COLLIDING or UNKNOWN (int8 array) for each row of qs (N, D), rad.
+        ``motion`` (N, D), rad: FREE then also says that every configuration within motion[n, j]
+        of row n in each joint j is free (``sphere_batch.classify_many``)."""
         qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
         if self.active:  # in batches of configurations (the scalar kernel's verdicts)
             _kernel.announce_compile(classify_many)  # on stderr, once, when the first call compiles
-            return classify_many(qs, self._data)
+            return classify_many(qs, self._data, _motion(motion, qs))
         return np.full(len(qs), UNKNOWN, dtype=np.int8)
 
-    def prove_free(self, qs) -> np.ndarray:
-        """True for each row of qs (N, 7) that the robot's exact shapes prove collision-free
+    def prove_free(self, qs, motion=None) -> np.ndarray:
+        """True for each row of qs (N, D) that the robot's exact shapes prove collision-free
         for Drake's checker (``hull_kernel``): what ``classify`` leaves UNKNOWN, decided
-        without Drake where a separating plane shows it. False everywhere without a model."""
+        without Drake where a separating plane shows it. False everywhere without a model.
+        ``motion`` as ``classify``'s."""
         qs = np.ascontiguousarray(np.atleast_2d(qs), dtype=float)
         if not self.active:
             return np.zeros(len(qs), dtype=bool)
         _kernel.announce_compile(prove_free_packed)
-        return prove_free_packed(qs, *self.packed_data(), *self.packed_hulls())
+        packed = (*self.packed_data(), *self.packed_hulls())
+        return prove_free_packed(qs, *packed, _motion(motion, qs))
+
+    def geometry_speed(self) -> tuple[list[int], np.ndarray] | None:
+        """(body indices, (B, D) speed bounds of their collision geometry's points, m/rad), for
+        margins on Drake's distances (``checker.swept_free``); None without a model."""
+        if not self.supported:
+            return None
+        self.sync()
+        return list(self._present), self._hull_data.speed
 
     def prefixes(self, q_a, q_b, step: float, stop_at_unknown: bool):
         """Classifies samples of segments from their starts up to their first blocking one;
@@ -337,6 +365,13 @@ class SphereCollisionModel:
             return np.zeros(len(n), dtype=np.int64), n, np.zeros(0, int), np.zeros(0, int)
         edge = np.repeat(np.arange(len(n)), n)
         return n.copy(), n, edge, np.arange(len(edge)) - np.repeat(np.cumsum(n) - n, n)
+
+
+def _motion(motion, qs: np.ndarray) -> np.ndarray:
+    """The kernels' ``motion`` argument: (N, D) float64, or (0, D) for none."""
+    if motion is None:
+        return np.zeros((0, qs.shape[1]))
+    return np.array(np.broadcast_to(motion, qs.shape), dtype=float)  # writeable: one signature
 
 
 def _unfiltered_in_model(plant, inspector, bodies) -> set[tuple[int, int]]:

@@ -14,7 +14,8 @@ RRT-Connect with restarts (its run times are heavy-tailed), then shortcutting. T
 re-checked at ``validation.resolution``: a failing segment is re-planned on fine edge checks, at
 most ``validation.max_repairs`` times, or the whole path when a segment cannot be repaired; KTO
 smoothing is kept when it is shorter and passes the same check. Collision queries go to sphere
-models first when ``spheres.enabled`` (``planning.collision.sphere_checker``).
+models first when ``spheres.enabled`` (``planning.collision.sphere_checker``). Both fine checks
+cover the path between its samples too (``validation.swept``; ``checker.swept_free``).
 
 ``options`` is a ``planning.planner_options.MotionPlannerOptions`` (read, not imported: the
 options belong to the planner's layer).
@@ -24,7 +25,7 @@ import time
 
 import numpy as np
 
-from planning.collision.checker import CheckerAdapter, first_invalid_segment
+from planning.collision.checker import CheckerAdapter, first_invalid_segment, swept_free
 from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.collision.spheres import FREE
 from planning.errors import ErrorCode, PlanningError
@@ -83,8 +84,7 @@ class JointPathSearch:
         )
 
     def _sphere_model(self):
-        """The scene's sphere model when it can answer (spheres enabled, all shapes covered),
-        else None."""
+        """The scene's sphere model when it can answer (enabled, all shapes covered), or None."""
         opts = self._options.spheres
         if not opts.enabled:
             return None
@@ -105,8 +105,7 @@ class JointPathSearch:
         return model if model.active else None
 
     def prepare(self) -> None:
-        """Syncs the sphere models with the scene (see ``MotionPlanner.prepare``) and packs
-        the compiled search's data."""
+        """Syncs the sphere models with the scene (``MotionPlanner.prepare``), packs their data."""
         model = self._compiled_model()  # the synced sphere model, when the compiled search runs
         if model is not None:
             model.packed_data()
@@ -116,8 +115,7 @@ class JointPathSearch:
         self._refine_model(rebuild=True)
 
     def warm_up(self) -> None:
-        """Has the compiled search ready (compiled, or loaded from numba's cache): once, when
-        the planner is made."""
+        """Has the compiled search ready (compiled, or loaded from numba's cache), once."""
         model = self._sphere_model()
         if model is not None:
             compiled_rrt.warm_up(model.kernel_data(), *self.limits, self._hulls(model))
@@ -140,7 +138,7 @@ class JointPathSearch:
         return steps
 
     def proves_free(self, q, *, first: bool = True) -> bool:
-        """True when the sphere models prove the arm configuration q (7,) collision-free (then
+        """True when the sphere models prove the arm configuration q (D,) collision-free (then
         Drake's checker finds it free too): the first cover, then the tighter one; False when
         they cannot tell or there are none. ``first`` False: the tighter one alone (the first
         has been asked)."""
@@ -150,7 +148,7 @@ class JointPathSearch:
         return False
 
     def find(self, q_start, q_goal, deadline: float, check_ends=None) -> tuple[np.ndarray, str]:
-        """A validated path from q_start to q_goal (7,) and how it was found.
+        """A validated path from q_start to q_goal (D,) and how it was found.
 
         Args:
             check_ends: None when the caller has checked both ends; else a callable
@@ -261,15 +259,16 @@ class JointPathSearch:
         q_start = np.asarray(q_start, dtype=float)
         q_goal = np.asarray(q_goal, dtype=float)
         hulls = self._hulls(model)
+        swept = opts.validation.swept
         if self.fused:  # the kernel data packed: two arrays to pass, not 35 (and the hulls' two)
             packed = arguments(*search, (*model.packed_data(), *hulls))
-            result = compiled_rrt.solve(q_start, q_goal, *packed, check_ends is not None, fine)
+            result = compiled_rrt.solve(q_start, q_goal, *packed, bool(check_ends), fine, swept)
             if result[0] == compiled_rrt.ENDS_UNPROVEN:  # the tighter cover, then Drake
                 check_ends(
                     bool(result[4] & 1) and not self.proves_free(q_start, first=False),
                     bool(result[4] & 2) and not self.proves_free(q_goal, first=False),
                 )  # raises when one collides
-                result = compiled_rrt.solve(q_start, q_goal, *packed, False, fine)
+                result = compiled_rrt.solve(q_start, q_goal, *packed, False, fine, swept)
             status, path, how, _, _, bad, unknown, segment = result
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
@@ -301,19 +300,22 @@ class JointPathSearch:
         return None, name, path
 
     def _first_failing_segment(self, path, resolution: float, data, hulls, checked=None) -> int:
-        """The first segment of the path with a sample at ``resolution`` that the spheres
-        prove colliding or that Drake finds colliding among those they cannot decide; -1 when
-        none. ``checked``: the spheres' fine check of this path when made already (``solve``).
-        The samples they cannot decide go to the exact shapes (``hulls``, packed), then to the
-        tighter cover, then to Drake."""
+        """The first segment of the path with a sample at ``resolution`` (a cell, with
+        ``validation.swept``: ``swept_free``) that the spheres prove colliding or Drake finds
+        colliding among those they, the exact shapes (``hulls``, packed) and the tighter cover
+        cannot decide; -1 when none. ``checked``: the spheres' fine check, when made already."""
+        swept = self._options.validation.swept
         if checked is None:
-            checked = compiled_rrt.fine_check(path, resolution, data, *hulls)[:3]
+            checked = compiled_rrt.fine_check(path, resolution, data, *hulls, swept)[:3]
         bad, unknown, segment = checked
         if bad >= 0:  # only samples before the colliding segment matter
             unknown, segment = unknown[segment < bad], segment[segment < bad]
         if len(unknown):  # what the exact shapes could not prove free (the compiled check)
             adapter = self.adapter(resolution, hulls=False)
-            blocked = segment[~adapter.undecided_free(unknown)]
+            if swept:  # the smaller cells go to the exact shapes too
+                halves = compiled_rrt.cell_halves(path, segment, resolution)
+                free = swept_free(self.adapter(resolution), unknown, halves, adapter.cell_ratios)
+            blocked = segment[~(free if swept else adapter.undecided_free(unknown))]
             if len(blocked):
                 return int(blocked.min())
         return int(bad)
@@ -352,8 +354,8 @@ class JointPathSearch:
         dense = kto_refine(self._scene, path, max_velocity=max_velocity)
         if dense is None or path_length(dense) >= path_length(path):
             return path, how
-        resolution = self._options.validation.resolution
-        if first_invalid_segment(self.adapter(), dense, resolution) is not None:
+        fine = self._options.validation
+        if first_invalid_segment(self.adapter(), dense, fine.resolution, fine.swept) is not None:
             return path, how
         return dense, how + "+kto"
 
@@ -361,12 +363,11 @@ class JointPathSearch:
         """Re-checks the path at the fine resolution; re-plans a failing segment with
         RRT-Connect on fine edge checks (whose edges are then not checked twice), at most
         ``validation.max_repairs`` times. When a segment cannot be repaired within
-        ``validation.repair_timeout``
-        (its ends sit in a tight spot), the whole path is re-planned and shortened with fine
-        edge checks instead."""
+        ``validation.repair_timeout`` (its ends sit in a tight spot), the whole path is
+        re-planned and shortened with fine edge checks instead."""
         opts = self._options.validation
         for _ in range(opts.max_repairs + 1):
-            bad = first_invalid_segment(fine, path, opts.resolution)
+            bad = first_invalid_segment(fine, path, opts.resolution, opts.swept)
             if bad is None:
                 return path, how
             # Measured: a fine-checked RRT-Connect between the segment's ends (usually a few

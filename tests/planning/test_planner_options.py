@@ -38,6 +38,7 @@ def test_defaults_are_the_documented_values():
         repair_timeout=0.5,
         repair_step=0.25,
         repair_resolution=0.03,
+        swept=True,
     )
     assert o.pose == mut.PoseGoalOptions(ik_solutions=4)
     assert o.cartesian == mut.CartesianOptions(step=0.005, rotation_step=0.05, jump_threshold=0.2)
@@ -133,6 +134,7 @@ BAD_VALUES = [
     ("validation", "repair_resolution", 0.0),
     ("validation", "repair_resolution", float("inf")),
     ("validation", "repair_resolution", float("nan")),
+    ("validation", "swept", "yes"),
     ("pose", "ik_solutions", 0),
     ("cartesian", "step", 0.0),
     ("cartesian", "rotation_step", 0.0),

@@ -16,6 +16,7 @@ from planning.collision.sphere_kernel import OBJ_COLUMNS
 from planning.collision.spheres import UNKNOWN
 from planning.scene_objects import SceneObject
 
+NO_MOTION = np.zeros((0, 7))
 CUBE = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
 
 
@@ -38,6 +39,8 @@ def hulls(shapes, world_gap=-1.0, pairs=(), pair_gap=0.0):
         geom_world=np.full(len(shapes), world_gap),
         pair=np.array(pairs, dtype=np.int64).reshape(-1, 2),
         pair_gap=np.full(len(pairs), pair_gap),
+        geom_body=np.zeros(len(shapes), dtype=np.int64),
+        speed=np.zeros((1, 7)),
     )
 
 
@@ -48,7 +51,7 @@ def posed(*poses):
 
 def proven(h, objects, T):
     none = np.zeros(OBJ_COLUMNS)
-    return mut._shapes_free(h, objects, T, np.empty((4, 3)), np.empty(3), none)
+    return mut._shapes_free(h, objects, T, np.empty((4, 3)), np.empty(3), none, np.zeros(0))
 
 
 def world(*objects):
@@ -113,7 +116,7 @@ def check_sound(scene, qs, least_share):
     model = sphere_model(scene)
     unknown = qs[model.classify(qs) == UNKNOWN]
     assert len(unknown) >= 20
-    free = mut.prove_free(unknown, model.kernel_data(), model.hull_data())
+    free = mut.prove_free(unknown, model.kernel_data(), model.hull_data(), NO_MOTION)
     drake = np.array([scene.is_collision_free(q) for q in unknown])
     assert not np.any(free & ~drake)
     assert free.sum() >= least_share * drake.sum()
@@ -169,6 +172,6 @@ def test_held_objects_are_shapes_too(scene):
 def test_non_finite_configurations_are_never_proven_free(scene):
     model = sphere_model(scene)
     q = scene.model.named_configurations["ready"].copy()
-    assert mut.prove_free(q[None], model.kernel_data(), model.hull_data())[0]
+    assert mut.prove_free(q[None], model.kernel_data(), model.hull_data(), NO_MOTION)[0]
     q[3] = np.nan
-    assert not mut.prove_free(q[None], model.kernel_data(), model.hull_data())[0]
+    assert not mut.prove_free(q[None], model.kernel_data(), model.hull_data(), NO_MOTION)[0]

@@ -24,7 +24,7 @@ def _batched(qs, d, count, mode, excused):
     blocked = np.zeros((len(qs) + count - 1) // count, dtype=np.bool_)
     for b, start in enumerate(range(0, len(qs), count)):
         n = min(count, len(qs) - start)
-        blocked[b] = mut.classify_batch(qs[start:], n, d, work, mode, excused, verdict)
+        blocked[b] = mut.classify_batch(qs[start:], n, d, work, mode, excused, verdict, np.zeros(0))
         out[start : start + n] = verdict[:n]
     return out, blocked
 
@@ -108,7 +108,7 @@ def test_classify_many_gives_each_configuration_the_scalar_verdict(count):
         qs = _samples(scene, seed=count)[:count].copy()
         if count > 1:
             qs[count // 2, 3] = np.nan  # a non-finite row among the others
-        got = mut.classify_many(qs, d)
+        got = mut.classify_many(qs, d, np.zeros((0, 7)))
         assert got.dtype == np.int8 and got.shape == (count,)
         if count:
             np.testing.assert_array_equal(got, classify_each(qs, d))

@@ -67,7 +67,7 @@ def test_around_an_obstacle_every_segment_is_free_for_drake(
     assert status == mut.FOUND and how == 1
     np.testing.assert_array_equal(path[0], q_a)
     np.testing.assert_array_equal(path[-1], q_b)
-    bad, unknown, _, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
+    bad, unknown, _, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS, False)
     assert bad == -1 and checks > 0
     assert all(scene.is_collision_free(q) for q in unknown)
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
@@ -109,7 +109,7 @@ def test_the_fine_check_names_the_colliding_segment(scene, data, ends):
     ready = scene.model.named_configurations["ready"]
     path = np.array([q_a, q_a + 0.1 * E[1], q_b])  # the second segment crosses the box
     assert not scene.is_collision_free(ready)
-    bad, _, _, _ = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
+    bad, _, _, _ = mut.fine_check(path, FINE, data, *mut.NO_HULLS, False)
     assert bad == 1
 
 
@@ -131,7 +131,7 @@ def test_the_fine_check_agrees_with_classifying_every_sample(scene, data, ends):
         stop = colliding[0] if len(colliding) else len(samples)
         expected_bad = owners[stop] if len(colliding) else -1
         undecided = [k for k in range(stop) if state[k] == UNKNOWN]
-        bad, unknown, segment, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
+        bad, unknown, segment, checks = mut.fine_check(path, FINE, data, *mut.NO_HULLS, False)
         assert bad == expected_bad
         np.testing.assert_array_equal(unknown, np.array(samples)[undecided].reshape(-1, 7))
         np.testing.assert_array_equal(segment, np.array(owners, dtype=int)[undecided])
@@ -197,24 +197,24 @@ def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
         return (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
 
     status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
-        *ends, *args, settings(), True, FINE
+        *ends, *args, settings(), True, FINE, False
     )
     alone = search(data, limits, *ends, seed=3)
     assert status == alone[0] == mut.FOUND and how == alone[2] and unproven == 0
     np.testing.assert_array_equal(path, alone[1])
-    fine = mut.fine_check(path, FINE, data, *mut.NO_HULLS)
+    fine = mut.fine_check(path, FINE, data, *mut.NO_HULLS, False)
     assert bad == fine[0] == -1
     np.testing.assert_array_equal(unknown, fine[1])
     np.testing.assert_array_equal(segment, fine[2])
     assert checks == alone[3] + fine[3] + 2  # and the two ends
     # An end the spheres cannot prove free stops it before any search: bit 1 the goal.
     ready = scene.model.named_configurations["ready"]  # inside the box
-    result = mut.solve(ends[0], ready, *args, settings(), True, FINE)
+    result = mut.solve(ends[0], ready, *args, settings(), True, FINE, False)
     assert result[0] == mut.ENDS_UNPROVEN and result[4] == 2 and len(result[1]) == 0
     nan = np.full(7, np.nan)
-    assert mut.solve(nan, ends[1], *args, settings(), True, FINE)[4] == 1
+    assert mut.solve(nan, ends[1], *args, settings(), True, FINE, False)[4] == 1
     # Without the ends' check it searches; with fine_step 0 it does not fine-check.
-    result = mut.solve(*ends, *args, settings(), False, 0.0)
+    result = mut.solve(*ends, *args, settings(), False, 0.0, False)
     assert result[0] == mut.FOUND and result[3] == alone[3] and result[5] == -1
     np.testing.assert_array_equal(result[1], alone[1])
 
@@ -230,14 +230,14 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
     ready = scene.model.named_configurations["ready"]
     qs = np.clip(ready + rng.normal(0.0, 0.3, (3000, 7)), *limits)
     unknown = qs[model.classify(qs) == UNKNOWN]
-    proven = unknown[mut.hull_kernel.prove_free(unknown, data, model.hull_data())]
+    proven = unknown[mut.hull_kernel.prove_free(unknown, data, model.hull_data(), np.zeros((0, 7)))]
     assert len(proven) >= 2
     start, goal = proven[0], proven[1]
 
     def solve(hull_buffers, check_ends):
         args = (*limits, *mut.pack(data), *hull_buffers)
         settings = (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
-        return mut.solve(start, goal, *args, settings, check_ends, FINE)
+        return mut.solve(start, goal, *args, settings, check_ends, FINE, False)
 
     without = solve(mut.NO_HULLS, True)
     assert without[0] == mut.ENDS_UNPROVEN and without[4] == 3  # neither end proven
@@ -250,7 +250,7 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
     assert bad == alone[5]
     left = {tuple(q) for q in unknown_left}
     assert left <= {tuple(q) for q in alone[6]}
-    expected = ~mut.hull_kernel.prove_free(alone[6], data, model.hull_data())
+    expected = ~mut.hull_kernel.prove_free(alone[6], data, model.hull_data(), np.zeros((0, 7)))
     assert len(left) == int(expected.sum()) < len(alone[6])
     assert len(segment) == len(unknown_left)
 

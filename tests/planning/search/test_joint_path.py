@@ -103,7 +103,9 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
         result = solve(q_a, q_b, *args)
         straight = np.vstack([q_a, q_b])
         data = mut.compiled_rrt.unpack(args[2], args[3])  # packed: floats, ints, then the hulls'
-        checked = mut.compiled_rrt.fine_check(straight, args[-1], data, args[4], args[5])[:3]
+        checked = mut.compiled_rrt.fine_check(straight, args[-2], data, args[4], args[5], args[-1])[
+            :3
+        ]
         return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
     plan, edge_steps = mut.compiled_rrt.plan, []
@@ -254,3 +256,25 @@ def test_warm_up_readies_every_compiled_call_a_request_may_make(scene, monkeypat
     options.spheres.hull_proofs = False
     mut.JointPathSearch(scene, options).warm_up()
     assert calls == {"warm_up": 2, "prove_free": 1}
+
+
+def test_a_path_touching_between_its_samples_is_not_returned():
+    """The straight line passes every sample, cell centres included, but touches a blade
+    between them (``tests/graze_helpers.py``): with ``validation.swept`` (the default) the
+    planner goes around it and the independent audit finds nothing on its path; without, it
+    returns the straight line, which the audit finds touching. A planner whose cells lost their
+    margins would return that line too, and fail here."""
+    from drake_sim.tools.path_audit import audit_path
+    from tests.graze_helpers import JOINT_NAMES, grazing_segment
+
+    scene = PlanningScene()
+    q_a, q_b, target = grazing_segment(scene)
+    options = MotionPlannerOptions()
+    path, how = mut.JointPathSearch(scene, options).find(q_a, q_b, deadline())
+    assert how != "straight"
+    np.testing.assert_array_equal(path[[0, -1]], [q_a, q_b])
+    assert audit_path(target, path, JOINT_NAMES, offsets=8)[0] == np.inf
+    options.validation.swept = False
+    path, how = mut.JointPathSearch(scene, options).find(q_a, q_b, deadline())
+    assert how == "straight"
+    assert audit_path(target, path, JOINT_NAMES, offsets=8)[0] < 0.0
