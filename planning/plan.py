@@ -308,48 +308,15 @@ class Plan:
 
     # ------------------------------------------------------------------------- display ----
     def plot(self, filename: Path | str, dt: float = 0.01, *, position_limits=None) -> None:
-        """Writes a PNG of the joint positions (rad), velocities (rad/s) and accelerations
-        (rad/s^2) against time (s), each joint's limits drawn as dashed lines of its colour.
-
-        Args:
-            filename: the PNG to write.
-            dt: sampling period, s.
-            position_limits: (lower (7,), upper (7,)) joint limits, rad; for a Panda plan, the
-                Panda URDF's when None (none drawn for other robots).
+        """Writes a PNG of the joints' positions, velocities and accelerations against time,
+        limits dashed (``planning.plan_plot.plot_plan``).
 
         Raises:
             RuntimeError: matplotlib is not installed.
         """
-        try:
-            import matplotlib
+        from planning.plan_plot import plot_plan
 
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
-        except ImportError as e:
-            raise RuntimeError("Plan.plot needs matplotlib (pip install matplotlib)") from e
-        if position_limits is None and self.robot.get("name") == "panda":
-            position_limits = _panda_position_limits()
-        ts = np.append(np.arange(0.0, self.duration, dt), self.duration)
-        samples = [np.array(x) for x in zip(*(self.sample(t) for t in ts), strict=True)]
-        limits = [position_limits, (-self.max_velocity, self.max_velocity)]
-        limits.append((-self.max_acceleration, self.max_acceleration))
-        units = ["position (rad)", "velocity (rad/s)", "acceleration (rad/s²)"]
-        fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
-        for ax, values, limit, unit in zip(axes, samples, limits, units, strict=True):
-            for j, name in enumerate(self.robot.get("joints", ARM_JOINTS)):
-                (line,) = ax.plot(ts, values[:, j], label=name, linewidth=1.2)
-                if limit is not None:
-                    for bound in limit:
-                        ax.axhline(bound[j], color=line.get_color(), ls="--", lw=0.7)
-            ax.set_ylabel(f"joint {unit}")
-            ax.grid(True, alpha=0.3)
-        axes[0].plot(self.times, self.waypoints, "k.", markersize=3)
-        axes[0].set_title("dashed: limits; dots: waypoints", fontsize=9)
-        axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-        axes[-1].set_xlabel("time (s)")
-        fig.tight_layout()
-        fig.savefig(filename, dpi=100)
-        plt.close(fig)
+        plot_plan(self, filename, dt, position_limits=position_limits)
 
     def replay(self, scene, *, dt: float = 0.02, realtime: bool = True) -> None:
         """Shows the motion in the scene's Meshcat (nothing when the scene has none)."""
@@ -382,21 +349,6 @@ def plan_robot(scene) -> dict:
         "joints": model.joint_names,
         "fingers": fingers,
     }
-
-
-def _panda_position_limits() -> tuple[np.ndarray, np.ndarray]:
-    """The Panda URDF's arm joint limits (lower, upper), rad."""
-    from pydrake.multibody.parsing import Parser
-    from pydrake.multibody.plant import MultibodyPlant
-
-    from planning.model.assets import panda_urdf
-
-    plant = MultibodyPlant(0.0)
-    Parser(plant).AddModels(str(panda_urdf()))
-    joints = [plant.GetJointByName(name) for name in ARM_JOINTS]
-    lower = np.array([j.position_lower_limits()[0] for j in joints])
-    upper = np.array([j.position_upper_limits()[0] for j in joints])
-    return lower, upper
 
 
 def _rounded(value):

@@ -33,12 +33,13 @@ from planning.errors import ErrorCode, PlanningError
 from planning.io import scene_files
 from planning.model.planning_model import PlanningModel, build_planning_model
 from planning.scene_objects import SceneObject
+from planning.scene_positions import ScenePositions
 
 _WORLD_PREFIX = "world/"
 _ATTACHED_PREFIX = "attached/"
 
 
-class PlanningScene:
+class PlanningScene(ScenePositions):
     """A robot, the objects around it and the objects it holds.
 
     Configurations ``q`` are the group's joints, with the other joints at ``other_positions``,
@@ -117,94 +118,6 @@ class PlanningScene:
     @property
     def meshcat(self):
         return self._meshcat
-
-    @property
-    def num_joints(self) -> int:
-        """The size of a planning configuration: the group's joints."""
-        return self._model.num_joints
-
-    @property
-    def lower(self) -> np.ndarray:
-        """The group's lower position limits (the robot model's: URDF, soft limits, MoveIt's
-        joint_limits.yaml; -pi for a continuous joint)."""
-        return self._model.robot.lower.copy()
-
-    @property
-    def upper(self) -> np.ndarray:
-        """The group's upper position limits (pi for a continuous joint)."""
-        return self._model.robot.upper.copy()
-
-    @property
-    def other_positions(self) -> np.ndarray:
-        """The positions of the joints outside the group (``model.other_indices``), rad or m:
-        where they stay while the group moves."""
-        return self._other_positions.copy()
-
-    @other_positions.setter
-    def other_positions(self, value) -> None:
-        shape = self._other_positions.shape
-        value = np.broadcast_to(np.asarray(value, dtype=float), shape).copy()
-        if not np.all(np.isfinite(value)):
-            raise ValueError(f"joint positions must be finite, got {value}")
-        self._other_positions = value
-        self.version += 1
-
-    @property
-    def finger_positions(self) -> np.ndarray:
-        """Each finger's position (the joints below the attach link; the Panda's: m, 0 closed,
-        0.04 open)."""
-        return self._other_positions[self._model.finger_mask].copy()
-
-    @finger_positions.setter
-    def finger_positions(self, value) -> None:
-        mask = self._model.finger_mask
-        value = np.broadcast_to(np.asarray(value, dtype=float), (int(mask.sum()),))
-        others = self._other_positions.copy()
-        others[mask] = value
-        self.other_positions = others
-
-    def set_positions(self, positions: dict[str, float]) -> None:
-        """Sets joints outside the group by name (a MoveIt robot state's joint_state); names the
-        robot does not have and the group's own joints are left out.
-
-        Raises:
-            ValueError: a value is not finite.
-        """
-        plant, instance = self._plant, self._model.instance
-        index = {int(i): k for k, i in enumerate(self._model.other_indices)}
-        others = self._other_positions.copy()
-        for name, value in positions.items():
-            if plant.HasJointNamed(name, instance):
-                k = index.get(plant.GetJointByName(name, instance).position_start())
-                if k is not None:
-                    others[k] = value
-        self.other_positions = others
-
-    def full_q(self, q) -> np.ndarray:
-        """Returns the plant's positions for a group q (the other joints added) or for all of
-        the plant's positions.
-
-        Raises:
-            ValueError: q has the wrong size or is not finite.
-        """
-        q = np.asarray(q, dtype=float).reshape(-1)
-        n, total = self._model.num_joints, self._plant.num_positions()
-        if q.size == n:
-            full = np.empty(total)
-            full[self._model.group_indices] = q
-            full[self._model.other_indices] = self._other_positions
-            q = full
-        elif q.size != total:
-            raise ValueError(
-                f"q must have {n} (the group's joints) or {total} (all joints) values, got {q.size}"
-            )
-        if not np.all(np.isfinite(q)):
-            raise ValueError(f"q is not finite: {q.tolist()}")
-        return q
-
-    def arm_q(self, q) -> np.ndarray:
-        """Returns the group's joints of a group or full q."""
-        return self.full_q(q)[self._model.group_indices]
 
     def plant_context(self, q):
         """Returns a plant context of this scene's model at q (shared scratch: do not keep it)."""

@@ -23,9 +23,15 @@ from planning.model.vamp_resources import vamp_resources
 
 def dev_resources() -> Path | None:
     """An unpacked copy of the vamp-planner sdist's ``resources/`` that ``pip download`` left
-    in the temporary folder (``pip-download-*/vamp-planner_*``), or None."""
-    found = sorted(Path(tempfile.gettempdir()).glob("pip-download-*/vamp-planner_*/resources"))
-    return next((folder for folder in found if folder.is_dir()), None)
+    in the temporary folder (``pip-download-*/vamp-planner_*``), or None. The oldest copy that
+    holds the four robots' URDFs: a pip download running beside the tests (one fetching the
+    descriptions into a test session's cache) unpacks into the same place, half-done for a
+    while."""
+    found = Path(tempfile.gettempdir()).glob("pip-download-*/vamp-planner_*/resources")
+    found = sorted(found, key=lambda folder: folder.stat().st_mtime)
+    robots = ("panda", "ur5", "fetch", "baxter")
+    whole = (f for f in found if all((f / r / f"{r}.urdf").is_file() for r in robots))
+    return next(whole, None)
 
 
 MOVEIT_SRDF = Path(__file__).resolve().parents[2] / "shared" / "real_ros" / "moveit" / "srdf"

@@ -65,7 +65,9 @@ LAYERS = (
         (
             "planning.robot_state",
             "planning.planning_scene",
+            "planning.scene_positions",
             "planning.plan",
+            "planning.plan_plot",
             "planning.planner_options",
             "planning.planner_kernels",
             "planning.planner_setup",

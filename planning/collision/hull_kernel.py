@@ -20,6 +20,10 @@ Drake's checker is asked, as before.
 ``MARGIN`` (0.1 mm) is on the safe side of every threshold: it covers rounding here (~1e-15 m)
 and in Drake's own distance queries by orders of magnitude, and it is far below the covers'
 slack, so it costs no proofs that matter.
+
+A compiled kernel module, longer than the project's 400 lines since the swept check added its
+margins (``geom_body``, ``speed``): its GJK, its data and its entry point stay in one file, which
+numba keys its cache on (``refresh_cache``), rather than in more files every entry point lists.
 """
 
 from __future__ import annotations

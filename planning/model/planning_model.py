@@ -141,6 +141,41 @@ class PlanningModel:
                 return self.named_configurations[name].copy()
         return 0.5 * (self.robot.lower + self.robot.upper)
 
+    def full_q(self, q, others) -> np.ndarray:
+        """The plant's positions for a group q (``others`` over ``other_indices`` added) or for
+        all of the plant's positions (returned as they are).
+
+        Raises:
+            ValueError: q has the wrong size or is not finite.
+        """
+        q = np.asarray(q, dtype=float).reshape(-1)
+        n, total = self.num_joints, self.plant.num_positions()
+        if q.size == n:
+            full = np.empty(total)
+            full[self.group_indices] = q
+            full[self.other_indices] = others
+            q = full
+        elif q.size != total:
+            raise ValueError(
+                f"q must have {n} (the group's joints) or {total} (all joints) values, got {q.size}"
+            )
+        if not np.all(np.isfinite(q)):
+            raise ValueError(f"q is not finite: {q.tolist()}")
+        return q
+
+    def others_by_name(self, positions: dict[str, float], others) -> np.ndarray:
+        """A copy of ``others`` (over ``other_indices``) with the joints ``positions`` names
+        set; names the robot does not have and the group's own joints are left out."""
+        plant, instance = self.plant, self.instance
+        index = {int(i): k for k, i in enumerate(self.other_indices)}
+        others = np.array(others, dtype=float)
+        for name, value in positions.items():
+            if plant.HasJointNamed(name, instance):
+                k = index.get(plant.GetJointByName(name, instance).position_start())
+                if k is not None:
+                    others[k] = value
+        return others
+
     @property
     def arm_indices(self) -> np.ndarray:
         """``group_indices`` (the name planners used when the group was the Panda's arm)."""
