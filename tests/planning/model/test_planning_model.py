@@ -97,8 +97,8 @@ def test_bad_configurations_name_the_problem(config, match):
 def test_a_description_yaml_sets_frames_states_and_other_joints(tmp_path):
     shipped = mut.description_file("panda")
     text = shipped.read_text().replace(
-        "joint_limits: panda_joint_limits.yaml",
-        f"joint_limits: {shipped.parent}/panda_joint_limits.yaml",
+        "joint_limits: panda/joint_limits.yaml",
+        f"joint_limits: {shipped.parent}/panda/joint_limits.yaml",
     )
     path = tmp_path / "mine.yaml"
     path.write_text(
