@@ -46,14 +46,16 @@ _SHIPPED = config_dir() / "robots"
 
 
 def description_file(name: str) -> Path:
-    """The description a configuration names: a shipped robot's name (``config/robots/<name>.yaml``)
-    or a path to a description YAML or a ``*_moveit_config`` folder."""
-    if name and "/" not in name and "\\" not in name and not name.endswith((".yaml", ".yml")):
-        shipped = _SHIPPED / f"{name}.yaml"
-        if not shipped.is_file():
-            known = ", ".join(sorted(p.stem for p in _SHIPPED.glob("*.yaml")))
-            raise ConfigError(f"model.description: no shipped robot {name!r} (shipped: {known})")
+    """The description a configuration names: a shipped robot's name
+    (``config/robots/<name>.yaml``), else a path to a description YAML or a ``*_moveit_config``
+    folder."""
+    bare = name and "/" not in name and "\\" not in name
+    shipped = _SHIPPED / f"{name}.yaml"
+    if bare and shipped.is_file():
         return shipped
+    if bare and not name.endswith((".yaml", ".yml")) and not Path(name).exists():
+        known = ", ".join(sorted(p.stem for p in _SHIPPED.glob("*.yaml")))
+        raise ConfigError(f"model.description: no shipped robot {name!r} (shipped: {known})")
     return Path(name)
 
 

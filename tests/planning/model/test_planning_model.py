@@ -1,6 +1,8 @@
 """The planning model built from a robot description: the Panda as before (same joints, filters,
 named configurations, attachment), other arms by name, and errors naming what is wrong."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -113,3 +115,15 @@ def test_a_description_yaml_sets_frames_states_and_other_joints(tmp_path):
     path.write_text(text.replace("attach_link: panda_hand", "attach_link: panda_link99"))
     with pytest.raises(ConfigError, match="attach_link: the URDF has no link 'panda_link99'"):
         mut.build_planning_model(RobotModelConfig(description=str(path)))
+
+
+def test_a_description_is_a_shipped_name_first_then_a_path(tmp_path, monkeypatch):
+    assert mut.description_file("ur5").name == "ur5.yaml"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_moveit_config").mkdir()
+    (tmp_path / "panda").mkdir()  # a folder of that name does not hide the shipped robot
+    assert mut.description_file("my_moveit_config") == Path("my_moveit_config")
+    assert mut.description_file("panda").parent.name == "robots"
+    assert mut.description_file("arms/mine.yaml") == Path("arms/mine.yaml")
+    with pytest.raises(ConfigError, match="no shipped robot 'nope'"):
+        mut.description_file("nope")
