@@ -70,6 +70,20 @@ def quiet_drake_logger() -> None:
     logging.getLogger("drake").setLevel(logging.WARNING)
 
 
+@contextlib.contextmanager
+def logger_level(name: str, level: int):
+    """Within the block, the logger ``name`` passes only records of ``level`` and above (a
+    command's own choice, e.g. a benchmark's table not buried in warnings); then its level is
+    what it was, so a command run in-process (tests, notebooks) changes nothing after it."""
+    logger = logging.getLogger(name)
+    saved = logger.level
+    logger.setLevel(level)
+    try:
+        yield
+    finally:
+        logger.setLevel(saved)
+
+
 def is_stop(error: BaseException) -> bool:
     """Whether ``error`` is a user stop: a ``KeyboardInterrupt`` (Ctrl-C, or SIGTERM under
     ``stop_on_signals``), or any error raised after ``stop_on_signals`` received a stop signal.

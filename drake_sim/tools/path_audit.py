@@ -259,8 +259,10 @@ def load_report(filename: Path) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    """Runs the audit; returns the exit code (0: nothing touches, 1: some path does)."""
-    return cli.run(_main, argv)
+    """Runs the audit; returns the exit code (0: nothing touches, 1: some path does). The
+    scenes load as the benchmark loads them: ``planning.io`` logs errors only while it runs."""
+    with cli.logger_level("planning.io", logging.ERROR):
+        return cli.run(_main, argv)
 
 
 def _main(argv) -> int:
@@ -296,7 +298,6 @@ def _main(argv) -> int:
         dataset = mbm.find_problems(args.dataset, robot=args.robot if shipped else "panda")
     except (FileNotFoundError, RuntimeError, ValueError) as e:
         raise ConfigError(str(e).splitlines()[0]) from None
-    logging.getLogger("planning.io").setLevel(logging.ERROR)  # as the benchmark loads them
     target = planning_scene_target(PlanningScene(robot_config(args.robot)))
     audited, touches = audit_rows(
         rows, dataset, target, step=args.step, offsets=args.offsets, progress=print

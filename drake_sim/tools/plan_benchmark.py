@@ -372,8 +372,11 @@ def _unmade_row(error) -> dict:
 
 def main(argv=None) -> int:
     """Runs the benchmark; returns the exit code (``drake_sim.base.cli.run``: 2 with one stderr
-    line on bad input, 0 on Ctrl-C or SIGTERM)."""
-    return cli.run(_main, argv)
+    line on bad input, 0 on Ctrl-C or SIGTERM). MBM scenes name joints and allowed pairs the
+    robot's URDF lacks (VAMP's models fix the grippers): their warnings, one per scene, would
+    bury the table, so ``planning.io`` logs errors only while it runs."""
+    with cli.logger_level("planning.io", logging.ERROR):
+        return cli.run(_main, argv)
 
 
 def _main(argv) -> int:
@@ -386,9 +389,6 @@ def _main(argv) -> int:
         ou.setLogLevel(ou.LogLevel.LOG_WARN)
     # The compiled planner from the first problem: a fresh install waits for its build here.
     planner_kernels.wait_ready(progress=planner_kernels.ProgressLine("planning.benchmark"))
-    # MBM scenes name joints and allowed pairs the robot's URDF lacks (VAMP's models fix the
-    # grippers): one warning per scene would bury the table; failures still raise.
-    logging.getLogger("planning.io").setLevel(logging.ERROR)
     scene = PlanningScene(robot_config(args.robot))
     planner = MotionPlanner(scene, options)
     joint_names = list(group_joint_names(scene))

@@ -424,3 +424,13 @@ def test_run_keeps_drakes_info_lines_off_stderr():
     logging.getLogger("drake").setLevel(logging.INFO)
     assert mut.run(lambda argv: 0) == 0
     assert logging.getLogger("drake").level == logging.WARNING  # stderr is for errors
+
+
+def test_logger_level_holds_only_within_its_block():
+    import logging
+
+    logger = logging.getLogger("drake_sim.test_logger_level")
+    logger.setLevel(logging.INFO)
+    with mut.logger_level("drake_sim.test_logger_level", logging.ERROR):
+        assert logger.level == logging.ERROR
+    assert logger.level == logging.INFO
