@@ -51,15 +51,11 @@ from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.errors import ErrorCode, PlanningError
 from planning.io.plan_files import FORMAT, VERSION, check_plan_data, invalid, read_plan_json
 from planning.model.layout import FINGER_OPEN, NUM_FINGERS
-from planning.model.panda import ARM_JOINTS
+from planning.model.panda import ARM_JOINTS, FINGER_JOINTS
 from planning.scene_objects import describe_scene
 from planning.timing.retime import RetimeOptions, Timing
 
-PANDA_ARM = {
-    "name": "panda",
-    "group": "arm",
-    "fingers": ["panda_finger_joint1", "panda_finger_joint2"],
-}
+PANDA_ARM = {"name": "panda", "group": "arm", "fingers": list(FINGER_JOINTS)}
 """The robot of a plan made without one (the Panda's arm, as every version 1 and 2 file)."""
 _UNTIMEABLE = "the waypoints cannot be timed within the limits"
 
@@ -336,18 +332,12 @@ class Plan:
 
 def plan_robot(scene) -> dict:
     """The ``robot`` entry of a plan made in ``scene``: its robot's name, group and joints."""
-    model, plant = scene.model, scene.plant
-    fingers = [
-        plant.get_joint(j).name()
-        for j in plant.GetJointIndices(model.instance)
-        if plant.get_joint(j).num_positions() == 1
-        and plant.get_joint(j).position_start() in set(model.finger_indices.tolist())
-    ]
+    model = scene.model
     return {
         "name": model.robot.name,
         "group": model.robot.group,
         "joints": model.joint_names,
-        "fingers": fingers,
+        "fingers": model.finger_names,
     }
 
 

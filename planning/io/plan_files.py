@@ -31,6 +31,7 @@ import numpy as np
 from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
 from planning.errors import ErrorCode, PlanningError
+from planning.model.panda import FINGER_JOINTS  # a version 1 or 2 file's fingers
 from planning.scene_objects import CONVEX, SHAPE_SIZES, make_pose, validate_object
 
 FORMAT = "drake_sim.plan"
@@ -61,7 +62,6 @@ FIELDS = (
 """The top-level fields of a plan file, all required (``timing`` from version 2)."""
 _OBJECT_FIELDS = ("name", "shape", "size", "position", "orientation", "vertices")
 _ROBOT_FIELDS = ("name", "group", "joints", "fingers")
-_PANDA_FINGERS = ["panda_finger_joint1", "panda_finger_joint2"]  # of version 1 and 2 files
 _TIMING_FIELDS = ("method", "max_corner_angle", "path_tolerance", "margin")
 _VERSION_1_TIMING = {"method": "rest_to_rest"}  # version 1 files were timed rest to rest
 
@@ -239,7 +239,7 @@ class _Schema:
         self.string(value["name"], "robot.name")
         group = self.string(value["group"], "robot.group") if "group" in value else ""
         joints = self.names(value["joints"], "robot.joints", empty=False)
-        fingers = self.names(value.get("fingers", _PANDA_FINGERS), "robot.fingers", empty=True)
+        fingers = self.names(value.get("fingers", list(FINGER_JOINTS)), "robot.fingers", empty=True)
         return {"name": value["name"], "group": group, "joints": joints, "fingers": fingers}
 
     def names(self, value, path: str, *, empty: bool) -> list[str]:

@@ -41,6 +41,7 @@ SRDF's first end effector, else its first group.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import shlex
 import xml.etree.ElementTree as ET
@@ -277,8 +278,6 @@ def _positions(values: dict, where: str) -> dict[str, float]:
 
 
 def _is_number(value) -> bool:
-    import math
-
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 

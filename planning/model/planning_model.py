@@ -184,6 +184,15 @@ class PlanningModel:
         return self.group_indices
 
     @property
+    def finger_names(self) -> list[str]:
+        """The finger joints' names, in the order of ``finger_indices``."""
+        plant, fingers = self.plant, set(self.finger_indices.tolist())
+        joints = [plant.get_joint(j) for j in plant.GetJointIndices(self.instance)]
+        return [
+            j.name() for j in joints if j.num_positions() == 1 and j.position_start() in fingers
+        ]
+
+    @property
     def finger_indices(self) -> np.ndarray:
         """Positions of the joints below the attach link (a gripper's fingers) in the plant's q."""
         return self.other_indices[self.finger_mask]
@@ -211,7 +220,8 @@ def build_planning_model(config: RobotModelConfig, *, meshcat=None) -> PlanningM
     link = plant.GetFrameByName(robot.attach_link, instance)
     plant.WeldFrames(link, attachment.body_frame(), RigidTransform())
     plant.Finalize()
-    pairs = list(robot.disabled_pairs) + [(attachment_name, b) for b in _touch_links(robot)]
+    touch = _touch_links(robot)
+    pairs = list(robot.disabled_pairs) + [(attachment_name, b) for b in touch]
     pairs += [(a, b) for a, b in config.extra_disabled_collisions]
     apply_disabled_collisions(plant, scene_graph, instance, pairs)
     if meshcat is not None:
@@ -221,7 +231,7 @@ def build_planning_model(config: RobotModelConfig, *, meshcat=None) -> PlanningM
         MeshcatVisualizer.AddToBuilder(builder.builder(), scene_graph, meshcat, params)
     group = [plant.GetJointByName(n, instance).position_start() for n in robot.joint_names]
     others, defaults, fingers = [], [], []
-    below = set(_touch_links(robot))
+    below = set(touch)
     for index in plant.GetJointIndices(instance):
         joint = plant.get_joint(index)
         if joint.num_positions() == 1 and joint.name() not in robot.joint_names:
