@@ -396,6 +396,9 @@ def _band(d2, inner2, outer2):
     return FREE
 
 
+SELF_UNKNOWN = -1.0  # ``_classify_one``'s radius for an UNKNOWN of the robot's own pairs alone
+
+
 @njit(cache=True, _nrt=False, inline="always")
 def _classify_one(q, d, stop_at_unknown, work, lam):
     """(verdict, radius) for the arm configuration q (D,): FREE, COLLIDING or UNKNOWN, and for
@@ -403,7 +406,9 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
     bounds are ``lam`` (L + Q,), m per rad (``edge_speeds``), with every sphere staying FREE
     (inf when nothing moves; 0 for a verdict other than FREE). With ``stop_at_unknown``,
     returns at the first uncertain sphere (UNKNOWN, though a later sphere might prove a
-    collision). ``work`` holds scratch arrays (``_work``).
+    collision), the radius then ``SELF_UNKNOWN`` when that sphere is one of a pair of the
+    robot's own and every sphere was proven FREE of the objects. ``work`` holds scratch arrays
+    (``_work``).
 
     The radius is each test's clearance (the distance beyond its threshold: body, group or
     sphere against the objects, and body, group or sphere pairs) over the speed bound of what
@@ -546,8 +551,10 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
                 gap2 = u * u + v * v + w * w
                 verdict = _band(gap2, d.pair_in[k, m], d.pair_out[k, m])
                 if verdict != FREE:
-                    if verdict == COLLIDING or stop_at_unknown:
+                    if verdict == COLLIDING:
                         return verdict, 0.0
+                    if stop_at_unknown:  # every sphere was FREE of the objects
+                        return verdict, SELF_UNKNOWN
                     state = UNKNOWN
                 elif speed > 0.0:
                     radius = min(radius, (np.sqrt(gap2) - d.pair_out_root[k, m]) / speed)
@@ -719,45 +726,6 @@ def _near_any(q, anchors, radius):
         if total <= radius * radius:
             return True
     return False
-
-
-@njit(cache=True, _nrt=False)
-def edge_prefix(q_a, q_b, step, d, work, lam, q, counter, anchors, anchor_radius):
-    """Checks the samples t = i/n, i = 1..n, n = max(1, ceil(|q_b - q_a| / step)), of the
-    segment q_a -> q_b in order and returns (first, n): the index of the first blocking sample
-    (sample t = (first + 1) / n; n when none blocks). UNKNOWN blocks too, but within
-    ``anchor_radius`` (rad) of one of the ``anchors`` (K, D): configurations Drake has found
-    free (a search's start and goal), whose neighbours the spheres often cannot decide; a
-    caller that lets those through must ask Drake about them later. The end sample, which may
-    become a waypoint, passes that way only when it is an anchor itself.
-
-    A FREE sample certifies every sample within its radius (``_classify_one``), which are
-    then skipped: in free space one check stands for many. ``lam``, ``q`` are scratch
-    arrays (L + Q,), (D,); ``counter[0]`` counts the configurations classified."""
-    length = edge_speeds(q_a, q_b, d, lam)
-    if not np.isfinite(length):
-        return 0, 1
-    n = max(1, int(np.ceil(length / step)))
-    h = length / n
-    i = 1
-    while i <= n:
-        t = i / n
-        for j in range(len(q_a)):
-            q[j] = q_a[j] + t * (q_b[j] - q_a[j])
-        state, radius = _classify_one(q, d, True, work, lam)
-        counter[0] += 1
-        if state != FREE:
-            # The end only when it is an anchor itself: it may become a waypoint.
-            reach = anchor_radius if i < n else 0.0
-            if state == UNKNOWN and _near_any(q, anchors, reach):
-                i += 1
-                continue
-            return i - 1, n
-        # Samples k h away with k h <= radius are certified (rounding kept on the safe side).
-        if h <= 0.0 or radius >= (n - i) * h:
-            break
-        i += int(radius * (1.0 - 1e-9) / h) + 1
-    return n, n
 
 
 # ------------------------------------------------------------------- compile note ----

@@ -252,6 +252,7 @@ class JointPathSearch:
                 opts.rrt.balance,
                 opts.rrt.dynamic_domain or np.inf,
                 opts.rrt.dynamic_domain_min,
+                spheres.search_hull_proofs,
             )
             return (lower, upper, *kernel, settings)
 
@@ -272,7 +273,7 @@ class JointPathSearch:
             status, path, how, _, _, bad, unknown, segment = result
             checked = (bad, unknown, segment)
         else:  # the same steps as separate calls (the ends checked in find), each timed
-            status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *arguments(*search))
+            status, path, how, _ = compiled_rrt.plan(q_start, q_goal, *arguments(*search), *hulls)
             checked = None
         name = "straight" if how == 0 else "rrt_connect"
         if status != compiled_rrt.FOUND:
@@ -289,9 +290,10 @@ class JointPathSearch:
             if attempt == opts.validation.max_repairs:
                 break
             # A repair re-plans the segment on finer edges (``validation.repair_resolution``), the
-            # spheres alone deciding (nothing to ask); the fine check then looks at it again.
+            # spheres and the exact shapes alone deciding (nothing to ask Drake); the fine check
+            # then looks at it again.
             repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
-            status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair)
+            status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair, *hulls)
             if status != compiled_rrt.FOUND:
                 break
             path = np.vstack([path[:bad], piece, path[bad + 2 :]])

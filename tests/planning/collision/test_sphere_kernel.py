@@ -263,17 +263,6 @@ def _radius(q, q_to, d):
     return mut._classify_one(q, d, False, mut._work(d), lam)
 
 
-@njit
-def _first_blocking(q_a, q_b, step, d):
-    """``edge_prefix`` of one segment, no anchors: (first, n, configurations classified)."""
-    lam = np.zeros(len(d.body_step) + len(d.body_pair))
-    counter = np.zeros(1, dtype=np.int64)
-    first, n = mut.edge_prefix(
-        q_a, q_b, step, d, mut._work(d), lam, np.empty(len(q_a)), counter, np.empty((0, 7)), 0.0
-    )
-    return first, n, counter[0]
-
-
 def test_a_free_configuration_stays_free_within_its_radius(cluttered):
     scene, model, d = cluttered
     adapter = CheckerAdapter(scene)
@@ -334,21 +323,32 @@ def test_a_group_far_from_the_other_bodys_sphere_is_far_from_its_groups(cluttere
     assert culled > 100  # the culling applies where the bodies' spheres overlap
 
 
-def test_edge_prefix_agrees_with_sampling_every_step(cluttered):
-    """The certified march finds the same first blocking sample as checking all of them."""
+def test_an_unknown_of_the_robots_own_pairs_alone_says_so(cluttered):
+    """With ``stop_at_unknown``, an UNKNOWN whose spheres were all proven FREE of the objects
+    (only a pair of the robot's own links undecided) has the radius ``SELF_UNKNOWN``; one
+    undecided against an object has 0. Without objects every UNKNOWN is of the first kind."""
+    from planning import PlanningConfig, PlanningScene
+    from planning.collision.sphere_checker import sphere_model
+
     scene, model, d = cluttered
+    bare = sphere_model(PlanningScene(PlanningConfig(table=None))).kernel_data()
     adapter = CheckerAdapter(scene)
-    lower, upper = adapter.lower, adapter.upper
-    rng = np.random.default_rng(2)
-    fewer = 0
-    for _ in range(60):
-        q_a, q_b = rng.uniform(lower, upper, (2, 7))
-        q_b = q_a + 0.5 * (q_b - q_a)
-        first, n, checks = _first_blocking(q_a, q_b, 0.01, d)
-        every, n_every, _, _ = mut.prefixes(q_a[None], q_b[None], 0.01, True, d)
-        assert (first, n) == (every[0], n_every[0])
-        fewer += checks < min(first + 1, n)
-    assert fewer > 10
+    rng = np.random.default_rng(4)
+    kinds = {"bare": set(), "cluttered": set()}
+    for q in rng.uniform(adapter.lower, adapter.upper, (600, 7)):
+        for name, data in (("bare", bare), ("cluttered", d)):
+            state, radius = _stopping(q, data)
+            if state == mut.UNKNOWN:
+                kinds[name].add(radius)
+    assert kinds["bare"] == {mut.SELF_UNKNOWN}
+    assert kinds["cluttered"] == {mut.SELF_UNKNOWN, 0.0}
+
+
+@njit
+def _stopping(q, d):
+    """``_classify_one`` with ``stop_at_unknown``, fresh scratch arrays."""
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    return mut._classify_one(q, d, True, mut._work(d), lam)
 
 
 class _FakeDispatcher:

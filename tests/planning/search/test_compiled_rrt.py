@@ -43,7 +43,8 @@ def search(
     domain_min=1.0,
 ):
     settings = (0.1, 1.0, 0.05, max_checks, iterations, mut.seed_state(seed), anchor_radius)
-    return mut.plan(q_a, q_b, *limits, data, (*settings, balance, domain, domain_min))
+    settings = (*settings, balance, domain, domain_min, True)
+    return mut.plan(q_a, q_b, *limits, data, settings, *mut.NO_HULLS)
 
 
 def test_a_free_straight_line_is_the_path(data, limits, ends):
@@ -156,8 +157,41 @@ def test_the_generator_is_the_same_everywhere():
 
 @njit
 def _edge_free(q_a, q_b, step, d, anchors, anchor_radius):
-    """``_free`` with fresh scratch arrays (they do not box back into Python from the cache)."""
-    return mut._free(q_a, q_b, step, d, mut.make_scratch(d, len(q_a), anchors, anchor_radius))
+    """``_free`` with fresh scratch arrays (they do not box back into Python from the cache),
+    the spheres alone deciding."""
+    scratch = mut.make_scratch(d, len(q_a), anchors, anchor_radius, mut._no_hulls(), False)
+    return mut._free(q_a, q_b, step, d, scratch)
+
+
+@njit
+def _first_blocking(q_a, q_b, step, d):
+    """``_edge_prefix`` of one segment, no anchors, the spheres alone: (first, n,
+    configurations classified)."""
+    scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0, mut._no_hulls(), False)
+    first, n = mut._edge_prefix(q_a, q_b, step, d, scratch)
+    return first, n, scratch[3][0]
+
+
+def test_edge_prefix_agrees_with_sampling_every_step(data, limits):
+    """The certified march finds the same first blocking sample as checking all of them."""
+    rng = np.random.default_rng(2)
+    fewer = 0
+    for _ in range(60):
+        q_a, q_b = rng.uniform(*limits, (2, 7))
+        q_b = q_a + 0.5 * (q_b - q_a)
+        first, n, checks = _first_blocking(q_a, q_b, 0.01, data)
+        every, n_every, _, _ = mut.sphere_kernel.prefixes(q_a[None], q_b[None], 0.01, True, data)
+        assert (first, n) == (every[0], n_every[0])
+        fewer += checks < min(first + 1, n)
+    assert fewer > 10
+
+
+@njit
+def _edge_proven_free(q_a, q_b, step, d, hull_floats, hull_ints):
+    """``_free`` with the exact shapes proving what the spheres cannot decide, no anchors."""
+    h = mut.unpack_hulls(hull_floats, hull_ints)
+    scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0, h, True)
+    return mut._free(q_a, q_b, step, d, scratch)
 
 
 def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
@@ -178,6 +212,33 @@ def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
     assert not _edge_free(free, undecided, 0.1, data, (undecided + 0.01)[None, :], 0.05)
 
 
+@njit
+def _own_pairs_alone(q, d):
+    """True when the spheres leave q UNKNOWN for a pair of the robot's own links alone."""
+    lam = np.zeros(len(d.body_step) + len(d.body_pair))
+    state, radius = mut._classify_one(q, d, True, mut._work(d), lam)
+    return state == mut.UNKNOWN and radius == mut.SELF_UNKNOWN
+
+
+def test_undecided_own_pairs_the_exact_shapes_prove_free_pass(scene, data, limits):
+    """With the search's hull proofs, a sample the spheres leave UNKNOWN for the robot's own
+    links alone passes when its exact shapes prove it free, anywhere (no anchor needed); one
+    UNKNOWN against an object, or not proven, still blocks. What passes is free for Drake."""
+    model = sphere_model(scene)
+    hulls = model.packed_hulls()
+    rng = np.random.default_rng(5)
+    qs = rng.uniform(*limits, (4000, 7))
+    undecided = qs[model.classify(qs) == UNKNOWN]
+    proven = mut.hull_kernel.prove_free(undecided, data, model.hull_data(), np.zeros((0, 7)))
+    own = np.array([_own_pairs_alone(q, data) for q in undecided])
+    assert (proven & own).any() and (proven & ~own).any() and (~proven & own).any()
+    for q, ok in zip(undecided[:80], proven[:80] & own[:80], strict=True):
+        assert _edge_proven_free(q, q, 0.1, data, *hulls) == ok
+        assert not _edge_free(q, q, 0.1, data, np.empty((0, 7)), 0.0)
+        if ok:
+            assert scene.is_collision_free(q)
+
+
 def test_an_edge_with_a_non_finite_end_is_never_free(data, ends):
     q_a = ends[0]
     bad = q_a.copy()
@@ -194,7 +255,7 @@ def test_solve_is_the_ends_check_the_search_and_the_fine_check_in_one_call(
     args = (*limits, *mut.pack(data), *mut.NO_HULLS)
 
     def settings():  # a fresh generator each time, seeded with 3
-        return (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
+        return (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0, True)
 
     status, path, how, checks, unproven, bad, unknown, segment = mut.solve(
         *ends, *args, settings(), True, FINE, False
@@ -236,7 +297,8 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
 
     def solve(hull_buffers, check_ends):
         args = (*limits, *mut.pack(data), *hull_buffers)
-        settings = (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0)
+        # The search on the spheres alone (its own proofs off): the fine check is compared.
+        settings = (0.1, 1.0, 0.05, 50_000, 20, mut.seed_state(3), 0.0, True, np.inf, 1.0, False)
         return mut.solve(start, goal, *args, settings, check_ends, FINE, False)
 
     without = solve(mut.NO_HULLS, True)
@@ -259,7 +321,7 @@ def test_solve_asks_the_exact_shapes_about_what_the_spheres_cannot_decide(scene,
 def _free_after(q_a, q_b, d, blocked):
     """``_free(q_a, q_b)`` (end known) after the edges ``blocked`` (K, 2, 7) were checked with
     the same scratch arrays, and the configurations it classified."""
-    scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0)
+    scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0, mut._no_hulls(), False)
     for k in range(len(blocked)):
         mut._free(blocked[k, 0], blocked[k, 1], 0.1, d, scratch)
     before = scratch[3][0]

@@ -110,9 +110,9 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
 
     plan, edge_steps = mut.compiled_rrt.plan, []
 
-    def recorded(q_a, q_b, lower, upper, data, settings):
+    def recorded(q_a, q_b, lower, upper, data, settings, *hulls):
         edge_steps.append(settings[0])  # edge_step
-        return plan(q_a, q_b, lower, upper, data, settings)
+        return plan(q_a, q_b, lower, upper, data, settings, *hulls)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
     monkeypatch.setattr(mut.compiled_rrt, "plan", recorded)
