@@ -21,6 +21,10 @@ and, for planning here (MoveIt keeps these in other files or in code; all option
                                          # its joints in MoveIt's order (replacing the SRDF's)
     default_positions: {finger_joint: 0.04}   # positions of joints outside the group (default:
                                          # 0, or the limit nearest to 0)
+    collision_meshes: pieces             # hull (default): each collision mesh is checked as
+                                         # its convex hull, as Drake does; pieces: cut into
+                                         # convex pieces first (planning.model.mesh_pieces),
+                                         # nearer the triangles MoveIt's FCL checks
 
 Paths and package folders are relative to the YAML file; URIs (``package://``, ``$(find ...)``)
 stay as written, for ``planning.model.robot_files`` to resolve (a package's folder may be one:
@@ -65,7 +69,10 @@ _KEYS = (
     "attach_link",
     "named_states",
     "default_positions",
+    "collision_meshes",
 )
+COLLISION_MESHES = ("hull", "pieces")
+"""The values of ``collision_meshes``."""
 
 
 @dataclass
@@ -84,6 +91,8 @@ class RobotDescription:
         attach_link: the link held objects hang on ("": the group's first tip link).
         named_states: more named states of the group, name -> positions over its joints.
         default_positions: joint name -> position for joints outside the group.
+        collision_meshes: "hull" (each collision mesh checked as its convex hull) or
+            "pieces" (cut into convex pieces, each checked as its hull).
     """
 
     urdf: str
@@ -97,6 +106,7 @@ class RobotDescription:
     attach_link: str = ""
     named_states: dict[str, list[float]] = field(default_factory=dict)
     default_positions: dict[str, float] = field(default_factory=dict)
+    collision_meshes: str = "hull"
 
 
 def load_robot_description(
@@ -145,6 +155,7 @@ def load_robot_description(
         attach_link=_text(data, "attach_link", where, ""),
         named_states=_named_states(_mapping(data, "named_states", where), where),
         default_positions=_positions(_mapping(data, "default_positions", where), where),
+        collision_meshes=_choice(data, "collision_meshes", COLLISION_MESHES, where),
     )
 
 
@@ -245,6 +256,14 @@ def _text(data: dict, key: str, where: str, default: str | None = None) -> str:
     if not isinstance(value, str) or (default is None and not value.strip()):
         raise ConfigError(f"{where}: {key} must be a non-empty string, got {value!r}")
     return value.strip()
+
+
+def _choice(data: dict, key: str, choices: tuple[str, ...], where: str) -> str:
+    """The value of ``key``, one of ``choices`` (the first when absent)."""
+    value = data.get(key, choices[0])
+    if value not in choices:
+        raise ConfigError(f"{where}: {key} must be one of {', '.join(choices)}, got {value!r}")
+    return value
 
 
 def _mapping(data: dict, key: str, where: str) -> dict:

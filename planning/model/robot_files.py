@@ -26,6 +26,7 @@ its default colour, Drake refuses the file) are left out of the copy; nothing el
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import importlib.metadata
 import re
@@ -38,7 +39,7 @@ from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import cache_dir
-from planning.model import mesh_convert
+from planning.model import mesh_convert, mesh_pieces
 from planning.model.xacro_files import render_xacro_file
 
 
@@ -201,6 +202,10 @@ def drake_urdf(description, text: str | None = None) -> Path:
     meshes = _mesh_elements(root, source, package_map(description))
     digest = hashlib.sha256(Path(__file__).read_bytes() + Path(mesh_convert.__file__).read_bytes())
     digest.update(f"trimesh {mesh_convert.trimesh_version()}\0".encode() + text.encode())
+    pieces = getattr(description, "collision_meshes", "hull") == "pieces"
+    if pieces:  # CoACD, its settings and this code cut the meshes
+        digest.update(Path(mesh_pieces.__file__).read_bytes())
+        digest.update(f"coacd {mesh_pieces.coacd_version()}\0".encode())
     content: dict[Path, str] = {}
     for _, _, path in meshes:
         if path not in content:
@@ -213,9 +218,19 @@ def drake_urdf(description, text: str | None = None) -> Path:
         return out
     _strip_ignored(root)
     scenes: dict[Path, object] = {}
+    cut: dict[Path, list[str]] = {}
+    parents = {child: parent for parent in root.iter() for child in parent}
     for element, kind, path in meshes:
         if path not in scenes:
             scenes[path] = mesh_convert.load_mesh_scene(path)
+        if pieces and kind == "collision":
+            if path not in cut:
+                stem = f"{path.stem}-{content[path][:12]}"
+                files = mesh_pieces.convex_pieces(scenes[path], out_dir / "meshes", stem)
+                cut[path] = [f"meshes/{f.name}" for f in files]
+            if cut[path]:  # else left whole, converted as any mesh
+                _split_collision(element, cut[path], parents)
+                continue
         visual = kind == "visual" and mesh_convert.has_appearance(scenes[path])
         relative = f"meshes/{path.stem}-{content[path][:12]}{'.gltf' if visual else '.obj'}"
         if not (out_dir / relative).is_file():
@@ -224,6 +239,22 @@ def drake_urdf(description, text: str | None = None) -> Path:
     ET.register_namespace("drake", "http://drake.mit.edu")
     write_atomic(out, ET.tostring(root, encoding="unicode"), "converted URDF")
     return out
+
+
+def _split_collision(mesh: ET.Element, files: list[str], parents: dict) -> None:
+    """Replaces the ``<collision>`` holding ``mesh`` by one per piece file, in its place, each
+    with the same origin and scale (a name gets ``_pieceK`` appended: Drake wants names unique
+    on a body)."""
+    collision = parents[parents[mesh]]
+    link = parents[collision]
+    at = list(link).index(collision)
+    link.remove(collision)
+    for k, name in enumerate(files):
+        mesh.set("filename", name)
+        piece = copy.deepcopy(collision)
+        if collision.get("name"):
+            piece.set("name", f"{collision.get('name')}_piece{k}")
+        link.insert(at + k, piece)
 
 
 def mesh_files(description, text: str | None = None) -> list[Path]:
