@@ -49,7 +49,7 @@ def test_defaults_are_the_documented_values():
     assert o.spheres == mut.SphereCheckOptions(
         enabled=True,
         slack=0.015,
-        drake_fallback_after=50_000,
+        drake_fallback_after=1_000_000,
         search_resolution=0.1,
         anchor_radius=0.15,
         refine_slack=0.005,

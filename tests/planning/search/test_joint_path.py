@@ -200,7 +200,7 @@ def test_the_spheres_prove_free_what_drake_finds_free(scene, dut, ends):
 def test_a_short_timeout_bounds_the_compiled_search(scene, ends, monkeypatch):
     """The compiled search cannot read the clock: the time left becomes its check budget (at
     2 us a check), so a request with 5 ms left may check about 2 500 configurations, not the
-    50 000 of drake_fallback_after; with the default timeout that bound is the one that binds."""
+    1 000 000 of drake_fallback_after; with the default timeout that bound is the one that binds."""
     budgets = []
     real = mut.compiled_rrt.solve
 
