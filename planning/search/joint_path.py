@@ -34,6 +34,7 @@ from planning.search import compiled_rrt
 from planning.search.rrt import rrt_connect
 from planning.search.shortcut import shortcut
 
+_REPAIR_CHECKS = 50_000  # configurations a compiled repair of one segment may check, at most
 _CHECK_S = 2e-6  # s, a generous time per configuration of the compiled search (measured 1.5 us)
 
 
@@ -237,7 +238,7 @@ class JointPathSearch:
         budget = max(1, min(opts.spheres.drake_fallback_after, int(left / _CHECK_S)))
         spheres, fine = opts.spheres, opts.validation.resolution
 
-        def arguments(edge_step, step, anchor_radius, kernel=(data,)):
+        def arguments(edge_step, step, anchor_radius, kernel=(data,), checks=budget):
             # By position: numba's dispatch of keyword arguments costs ~0.5 ms a call.
             # ``kernel``: the KernelData (``plan``) or its two packed buffers (``solve``); then
             # the search's settings, one tuple (``compiled_rrt.plan``).
@@ -245,7 +246,7 @@ class JointPathSearch:
                 edge_step,
                 step,
                 opts.rrt.goal_bias,
-                budget,
+                checks,
                 opts.shortcut.iterations,
                 rng,
                 anchor_radius,
@@ -291,8 +292,14 @@ class JointPathSearch:
                 break
             # A repair re-plans the segment on finer edges (``validation.repair_resolution``), the
             # spheres and the exact shapes alone deciding (nothing to ask Drake); the fine check
-            # then looks at it again.
-            repair = arguments(opts.validation.repair_resolution, opts.validation.repair_step, 0.0)
+            # then looks at it again. A short segment needs no whole search's budget: one that
+            # cannot be repaired within _REPAIR_CHECKS leaves the time to the Python pipeline.
+            repair = arguments(
+                opts.validation.repair_resolution,
+                opts.validation.repair_step,
+                0.0,
+                checks=min(budget, _REPAIR_CHECKS),
+            )
             status, piece, _, _ = compiled_rrt.plan(path[bad], path[bad + 1], *repair, *hulls)
             if status != compiled_rrt.FOUND:
                 break

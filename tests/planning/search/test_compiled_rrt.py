@@ -188,10 +188,11 @@ def test_edge_prefix_agrees_with_sampling_every_step(data, limits):
 
 @njit
 def _edge_proven_free(q_a, q_b, step, d, hull_floats, hull_ints):
-    """``_free`` with the exact shapes proving what the spheres cannot decide, no anchors."""
+    """``_free`` with the exact shapes proving what the spheres cannot decide, no anchors, and
+    the count of configurations it charged."""
     h = mut.unpack_hulls(hull_floats, hull_ints)
     scratch = mut.make_scratch(d, len(q_a), np.empty((0, len(q_a))), 0.0, h, True)
-    return mut._free(q_a, q_b, step, d, scratch)
+    return mut._free(q_a, q_b, step, d, scratch), scratch[3][0]
 
 
 def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
@@ -232,8 +233,9 @@ def test_undecided_own_pairs_the_exact_shapes_prove_free_pass(scene, data, limit
     proven = mut.hull_kernel.prove_free(undecided, data, model.hull_data(), np.zeros((0, 7)))
     own = np.array([_own_pairs_alone(q, data) for q in undecided])
     assert (proven & own).any() and (proven & ~own).any() and (~proven & own).any()
-    for q, ok in zip(undecided[:80], proven[:80] & own[:80], strict=True):
-        assert _edge_proven_free(q, q, 0.1, data, *hulls) == ok
+    for q, ok, asked in zip(undecided[:80], proven[:80] & own[:80], own[:80], strict=True):
+        # A proof costs HULL_CHECKS configurations of the search's budget.
+        assert _edge_proven_free(q, q, 0.1, data, *hulls) == (ok, 1 + asked * mut.HULL_CHECKS)
         assert not _edge_free(q, q, 0.1, data, np.empty((0, 7)), 0.0)
         if ok:
             assert scene.is_collision_free(q)

@@ -108,10 +108,11 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
         ]
         return (mut.compiled_rrt.FOUND, straight, 1, *result[3:5], *checked)
 
-    plan, edge_steps = mut.compiled_rrt.plan, []
+    plan, edge_steps, budgets = mut.compiled_rrt.plan, [], []
 
     def recorded(q_a, q_b, lower, upper, data, settings, *hulls):
         edge_steps.append(settings[0])  # edge_step
+        budgets.append(settings[3])  # max_checks
         return plan(q_a, q_b, lower, upper, data, settings, *hulls)
 
     monkeypatch.setattr(mut.compiled_rrt, "solve", through_the_box)
@@ -121,6 +122,7 @@ def test_a_compiled_path_failing_the_fine_check_is_repaired_in_compiled_code(
     assert how == "rrt_connect+repaired" and len(path) > 2
     # The repair searched on edges at repair_resolution; the fine check had the last word.
     assert edge_steps and set(edge_steps) == {MotionPlannerOptions().validation.repair_resolution}
+    assert max(budgets) <= mut._REPAIR_CHECKS < MotionPlannerOptions().spheres.drake_fallback_after
     assert first_invalid_segment(CheckerAdapter(scene), path, FINE) is None
 
 
