@@ -171,10 +171,22 @@ class JointPathSearch:
         adapter = self.adapter(search=True)
         fine = self.adapter(opts.validation.resolution)
         rng = np.random.default_rng(opts.seed)
-        if compiled is not None:  # the compiled search's path failed the fine check: repair it
+        attempt = 0
+        while compiled is not None and compiled[2] is not None:
+            # The compiled search's path failed the fine check: repair it; when that fails with
+            # time left (a segment in a tight spot), a fresh compiled search with the next seed
+            # rather than giving up (MBM: 3 UR5 and 3 Fetch requests failed in 0.25-1.5 s).
             _, how, path = compiled
-            if path is not None:
+            try:
                 return self._validated(fine, path, how, deadline, rng)
+            except PlanningError as e:
+                if e.code is not ErrorCode.PLANNING_FAILED or time.perf_counter() >= deadline:
+                    raise
+            attempt += 1
+            compiled = self._compiled(model, q_start, q_goal, deadline, None, attempt)
+            if compiled[0] is not None:
+                return compiled[0], f"{compiled[1]}+seed{attempt}"
+        if compiled is not None:
             adapter.counts["spheres"] += opts.spheres.drake_fallback_after  # Drake from the start
         how = "straight"
         path = np.vstack([q_start, q_goal])
@@ -214,10 +226,11 @@ class JointPathSearch:
             return None
         return self._sphere_model()
 
-    def _compiled(self, model, q_start, q_goal, deadline: float, check_ends=None):
+    def _compiled(self, model, q_start, q_goal, deadline: float, check_ends=None, attempt=0):
         """The compiled search and its fine check (``planning.search.compiled_rrt.solve``: one
         call, the ends' sphere check first when ``check_ends`` is given, see ``find``), with up
-        to ``validation.max_repairs`` compiled repairs of a segment that fails it; ``model`` is
+        to ``validation.max_repairs`` compiled repairs of a segment that fails it, its random
+        numbers seeded with ``seed`` + ``attempt``; ``model`` is
         ``_compiled_model()``.
 
         Returns:
@@ -230,7 +243,7 @@ class JointPathSearch:
             return None
         data = model.kernel_data()
         lower, upper = self.limits
-        rng = compiled_rrt.seed_state(opts.seed)
+        rng = compiled_rrt.seed_state(opts.seed + attempt)
         # Compiled code cannot read the clock: the time left becomes a count of checks (at a
         # generous _CHECK_S each), which only binds when the timeout is short; otherwise a seed
         # gives the same path on any machine.

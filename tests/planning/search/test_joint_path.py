@@ -280,3 +280,42 @@ def test_a_path_touching_between_its_samples_is_not_returned():
     path, how = mut.JointPathSearch(scene, options).find(q_a, q_b, deadline())
     assert how == "straight"
     assert audit_path(target, path, JOINT_NAMES, offsets=8)[0] < 0.0
+
+
+def test_a_path_that_cannot_be_repaired_makes_way_for_a_search_with_the_next_seed(
+    scene, ends, monkeypatch
+):
+    """When the compiled search's path fails the fine check and the repairs fail too with time
+    left, a fresh compiled search with the next seed runs rather than the request failing; the
+    seeds are consecutive, so the answer is still the same on any machine."""
+    dut = mut.JointPathSearch(scene, MotionPlannerOptions())
+    start, goal = ends
+    grazing = np.vstack([start, (start + goal) / 2 + 0.3, goal])
+    good = np.vstack([start, goal])
+    attempts = []
+
+    def compiled(model, q_start, q_goal, deadline, check_ends=None, attempt=0):
+        attempts.append(attempt)
+        return (None, "rrt_connect", grazing) if attempt < 2 else (good, "rrt_connect", None)
+
+    def validated(fine, path, how, deadline, rng):
+        raise PlanningError(ErrorCode.PLANNING_FAILED, "no path passed the fine collision check")
+
+    monkeypatch.setattr(dut, "_compiled", compiled)
+    monkeypatch.setattr(dut, "_validated", validated)
+    path, how = dut.find(start, goal, deadline())
+    assert attempts == [0, 1, 2] and how == "rrt_connect+seed2"
+    np.testing.assert_array_equal(path, good)
+    # With no time left after the repairs, the failure stands: no other search.
+    attempts.clear()
+    real, late = time.perf_counter, []
+
+    def out_of_time(fine, path, how, deadline, rng):
+        late.append(True)
+        raise PlanningError(ErrorCode.PLANNING_FAILED, "no path passed the fine collision check")
+
+    monkeypatch.setattr(dut, "_validated", out_of_time)
+    monkeypatch.setattr(mut.time, "perf_counter", lambda: real() + (1e6 if late else 0.0))
+    with pytest.raises(PlanningError) as info:
+        dut.find(start, goal, deadline())
+    assert attempts == [0] and info.value.code is ErrorCode.PLANNING_FAILED
