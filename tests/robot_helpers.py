@@ -130,6 +130,12 @@ TOY_LIMITS = """joint_limits:
   ghost: {has_velocity_limits: true, max_velocity: 1.0}
 """
 
+XARM7_YAML = """urdf: package://example-robot-data/robots/xarm_description/urdf/xarm7.urdf
+srdf: package://example-robot-data/robots/xarm_description/srdf/xarm7.srdf
+"""
+"""example-robot-data's xArm 7 as a two-line description YAML: an arm this project does not
+ship, described only by the files of an installed package."""
+
 TOY_YAML = """urdf: toy_description/urdf/toy.urdf.xacro
 srdf: toy_description/srdf/toy.srdf
 package_paths: {toy_description: toy_description}

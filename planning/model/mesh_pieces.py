@@ -80,7 +80,7 @@ def convex_pieces(scene, folder: Path, stem: str) -> list[Path]:
     import coacd
     import trimesh
 
-    mesh = scene.to_mesh() if hasattr(scene, "to_mesh") else scene
+    mesh = scene.to_mesh()
     if not worth_cutting(mesh):
         return []
     coacd.set_log_level("error")

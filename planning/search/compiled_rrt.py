@@ -686,8 +686,7 @@ def plan(q_start, q_goal, lower, upper, d, settings, hull_floats, hull_ints):
         ``how`` 0 the straight line, 1 RRT-Connect and shortcutting; ``checks`` the
         configurations classified.
     """
-    has_hulls = len(hull_ints) > 0
-    h = unpack_hulls(hull_floats, hull_ints) if has_hulls else _no_hulls()
+    h, has_hulls = _hull_data(hull_floats, hull_ints)
     return _plan(q_start, q_goal, lower, upper, d, settings, h, has_hulls)
 
 
@@ -755,8 +754,7 @@ def solve(
     segment = np.empty(0, dtype=np.int64)
     unproven = 0
     checks = 0
-    has_hulls = len(hull_ints) > 0
-    h = unpack_hulls(hull_floats, hull_ints) if has_hulls else _no_hulls()
+    h, has_hulls = _hull_data(hull_floats, hull_ints)
     if check_ends:
         # No anchors (UNKNOWN blocks); the exact shapes prove what the spheres cannot decide,
         # against the objects too (an end is a point: no edge to graze along).
@@ -789,8 +787,7 @@ def _unproven(unknown, segment, d, hull_floats, hull_ints, path, step, swept):
     (``_cells_free``) prove free."""
     if len(unknown) == 0 or (len(hull_ints) == 0 and not swept):
         return unknown, segment
-    has_hulls = len(hull_ints) > 0
-    h = unpack_hulls(hull_floats, hull_ints) if has_hulls else _no_hulls()
+    h, has_hulls = _hull_data(hull_floats, hull_ints)
     if swept:
         halves = cell_halves(path, segment, step)
         keep = ~_cells_free(unknown, halves, d, h, has_hulls)
@@ -803,6 +800,14 @@ def _unproven(unknown, segment, d, hull_floats, hull_ints, path, step, swept):
 
 
 _CELL_DEPTH = 4  # times ``_cells_free`` cuts a cell in four (a 0.01 rad cell: down to 0.04 mrad)
+
+
+@njit(cache=True)
+def _hull_data(hull_floats, hull_ints):
+    """(``HullData``, whether it has shapes) of the packed buffers (``NO_HULLS``: none, and
+    ``_no_hulls``' empty data in its place)."""
+    has_hulls = len(hull_ints) > 0
+    return (unpack_hulls(hull_floats, hull_ints) if has_hulls else _no_hulls()), has_hulls
 
 
 @njit(cache=True)

@@ -6,6 +6,7 @@ import diagrams.pickplace_scenario as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.model.layout import FINGER_OPEN, NUM_POSITIONS, READY_Q
+from tests.robot_helpers import XARM7_YAML
 
 SCENE = config_dir() / "pickplace.yaml"
 
@@ -54,10 +55,7 @@ def test_bad_scenarios_name_the_key(tmp_path, text, match):
 
 def test_another_arm_is_refused_by_name_until_stations_take_it(tmp_path):
     arm = tmp_path / "xarm7.yaml"
-    arm.write_text(
-        "urdf: package://example-robot-data/robots/xarm_description/urdf/xarm7.urdf\n"
-        "srdf: package://example-robot-data/robots/xarm_description/srdf/xarm7.srdf\n"
-    )
+    arm.write_text(XARM7_YAML)
     with pytest.raises(ConfigError, match="is UF_ROBOT; the pick-and-place stations simulate"):
         mut.load_pickplace_scenario(overrides=[f"robot.model.description={arm}"])
 

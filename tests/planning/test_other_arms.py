@@ -10,16 +10,13 @@ from planning import MotionPlanner, PlanningConfig, PlanningScene
 from planning.model.model_config import RobotModelConfig
 from planning.search import compiled_rrt
 from planning.task.random_problems import random_problems, workspace_of
-
-XARM = """urdf: package://example-robot-data/robots/xarm_description/urdf/xarm7.urdf
-srdf: package://example-robot-data/robots/xarm_description/srdf/xarm7.srdf
-"""
+from tests.robot_helpers import XARM7_YAML
 
 
 @pytest.fixture(scope="module")
 def xarm(tmp_path_factory):
     path = tmp_path_factory.mktemp("arms") / "xarm7.yaml"
-    path.write_text(XARM)
+    path.write_text(XARM7_YAML)
     config = PlanningConfig(model=RobotModelConfig(description=str(path)), table=None)
     return PlanningScene(config)
 

@@ -337,7 +337,7 @@ def test_an_unknown_of_the_robots_own_pairs_alone_says_so(cluttered):
     kinds = {"bare": set(), "cluttered": set()}
     for q in rng.uniform(adapter.lower, adapter.upper, (600, 7)):
         for name, data in (("bare", bare), ("cluttered", d)):
-            state, radius = _stopping(q, data)
+            state, radius = classify_stopping(q, data)
             if state == mut.UNKNOWN:
                 kinds[name].add(radius)
     assert kinds["bare"] == {mut.SELF_UNKNOWN}
@@ -345,7 +345,7 @@ def test_an_unknown_of_the_robots_own_pairs_alone_says_so(cluttered):
 
 
 @njit
-def _stopping(q, d):
+def classify_stopping(q, d):
     """``_classify_one`` with ``stop_at_unknown``, fresh scratch arrays."""
     lam = np.zeros(len(d.body_step) + len(d.body_pair))
     return mut._classify_one(q, d, True, mut._work(d), lam)

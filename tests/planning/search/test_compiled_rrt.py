@@ -12,7 +12,7 @@ from planning.collision.checker import CheckerAdapter, first_invalid_segment
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import COLLIDING, UNKNOWN
 from planning.paths import path_length
-from tests.planning.collision.test_sphere_kernel import classify_each
+from tests.planning.collision.test_sphere_kernel import classify_each, classify_stopping
 
 E = np.eye(7)
 FINE = 0.01  # rad
@@ -213,11 +213,9 @@ def test_undecided_samples_pass_only_near_the_anchors(scene, data, limits):
     assert not _edge_free(free, undecided, 0.1, data, (undecided + 0.01)[None, :], 0.05)
 
 
-@njit
 def _own_pairs_alone(q, d):
     """True when the spheres leave q UNKNOWN for a pair of the robot's own links alone."""
-    lam = np.zeros(len(d.body_step) + len(d.body_pair))
-    state, radius = mut._classify_one(q, d, True, mut._work(d), lam)
+    state, radius = classify_stopping(q, d)
     return state == mut.UNKNOWN and radius == mut.SELF_UNKNOWN
 
 
