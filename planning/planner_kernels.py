@@ -36,7 +36,7 @@ from pathlib import Path
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
-from planning.collision import sphere_batch, sphere_kernel
+from planning.collision import pair_tables, sphere_batch, sphere_kernel
 from planning.collision.hull_kernel import prove_free_packed
 from planning.search import compiled_rrt, pose_kernel
 
@@ -56,6 +56,7 @@ def heavy_dispatchers() -> tuple:
         compiled_rrt.fine_check,
         sphere_batch.classify_many,
         prove_free_packed,
+        pair_tables.clearances,
     )
 
 

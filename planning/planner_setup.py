@@ -14,6 +14,7 @@ import sys
 
 from planning import planner_kernels
 from planning.collision.hull_kernel import prove_free_packed
+from planning.collision.pair_tables import clearances
 from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_checker import sphere_model
 from planning.collision.sphere_kernel import announce_compile
@@ -70,6 +71,7 @@ def make_search(scene, options: MotionPlannerOptions, pending: bool) -> JointPat
             compiled_rrt.fine_check,
             classify_many,
             prove_free_packed,
+            clearances,
         )
         spheres = options.spheres
         if spheres.enabled:  # covers are made (or read from the cache) here, once

@@ -174,3 +174,45 @@ def make_toy_robot(folder: Path) -> Path:
     description = folder / "toy.yaml"
     description.write_text(TOY_YAML)
     return description
+
+
+ELBOW_URDF = """<?xml version="1.0"?>
+<robot name="elbow">
+  <link name="base"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.4 0.4 0.1"/>
+    </geometry></collision></link>
+  <link name="post"><collision><origin xyz="0 0 0.2"/><geometry><box size="0.06 0.06 0.2"/>
+    </geometry></collision></link>
+  <link name="arm"><collision><origin xyz="0.25 0 0"/><geometry><box size="0.3 0.05 0.05"/>
+    </geometry></collision></link>
+  <link name="tool"/>
+  <joint name="pan" type="continuous"><parent link="base"/><child link="post"/>
+    <origin xyz="0.1 0 0"/><axis xyz="0 0 1"/><limit velocity="1" effort="1"/></joint>
+  <joint name="lift" type="revolute"><parent link="post"/><child link="arm"/>
+    <origin xyz="0 0 0.35"/><axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="{lift_upper}" velocity="1" effort="1"/></joint>
+  <joint name="tip" type="fixed"><parent link="arm"/><child link="tool"/>
+    <origin xyz="0.4 0 0"/></joint>
+</robot>
+"""
+
+ELBOW_SRDF = """<?xml version="1.0"?>
+<robot name="elbow">
+  <group name="arm"><chain base_link="base" tip_link="tool"/></group>
+  <disable_collisions link1="base" link2="post" reason="Adjacent"/>
+  <disable_collisions link1="post" link2="arm" reason="Adjacent"/>
+</robot>
+"""
+
+
+def make_elbow_robot(folder: Path, lift_upper: float) -> Path:
+    """Writes a two-joint arm of boxes (a post turning on a plate, an arm lifting on the post)
+    and its description YAML into ``folder``; returns the YAML's path. Its only checked pair,
+    plate and arm, depends on both joints (the post turns off the plate's centre): with
+    ``lift_upper`` 1.5 rad the arm's far end reaches the plate when turned over it, with 0.3
+    rad it stays about 10 cm above."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "elbow.urdf").write_text(ELBOW_URDF.format(lift_upper=lift_upper))
+    (folder / "elbow.srdf").write_text(ELBOW_SRDF)
+    description = folder / "elbow.yaml"
+    description.write_text("urdf: elbow.urdf\nsrdf: elbow.srdf\ngroup: arm\n")
+    return description

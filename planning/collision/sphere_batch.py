@@ -34,7 +34,14 @@ from numba import njit
 
 from planning.collision import lane_geometry, sphere_kernel, trig
 from planning.collision.lane_geometry import centre_once, min_distance2, points, within
-from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, motion_margins, refresh_cache
+from planning.collision.sphere_kernel import (
+    COLLIDING,
+    FREE,
+    UNKNOWN,
+    motion_margins,
+    refresh_cache,
+    table_clearance,
+)
 from planning.collision.trig import sincos_lanes
 
 # Configurations per batch, at most. The loops over lanes run to a count known only at run time,
@@ -285,11 +292,14 @@ def classify_batch(qs, count, d, work, mode, excused, verdict, margin):
         if extra > 0.0:
             reach2 = (d.body_pair_reach[p] + extra) ** 2
         any_near = False
+        tabled = d.table_start[p] >= 0
         for lane in range(lanes):
             u = bodies[a_body, 0, lane] - bodies[b_body, 0, lane]
             v = bodies[a_body, 1, lane] - bodies[b_body, 1, lane]
             w = bodies[a_body, 2, lane] - bodies[b_body, 2, lane]
             inside = u * u + v * v + w * w < reach2
+            if inside and tabled:  # the pair's table proves it apart, widened: no sphere test
+                inside = not table_clearance(d, p, qs[lane]) > extra
             mask[lane] = 1.0 if inside else 0.0
             any_near |= inside
         if not any_near:

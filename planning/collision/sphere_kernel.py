@@ -95,6 +95,13 @@ class KernelData(NamedTuple):
     ``body_pair_reach``, ``pair_reach``, ``pair_out_root``, ``pair_side_reach``, the square
     roots of ``env_reach2``, ``env_out``, ``body_pair_reach2``, ``pair_reach2``, ``pair_out``,
     ``pair_side_reach2`` (0 where those are -1).
+    Clearance tables (``pair_tables``) of body pairs whose distance depends on one or two arm
+    joints: ``table_start`` (Q,) the pair's first cell in ``table`` (T,) (-1: no table),
+    ``table_joint`` (Q, 2) its joints (arm columns; -1: none), ``table_n`` (Q, 2) cells along
+    each (1: none), ``table_wrap`` (Q, 2) 1 where the cells span one turn and wrap,
+    ``table_lo``, ``table_step`` (Q, 2) the first cell's lower edge and the cells' width; a
+    cell's value, when above 0, is a clearance (m, in the units of ``speed``'s bounds) the
+    pair keeps everywhere in it, so that pair needs no sphere test there (``_table_clearance``).
     """
 
     parent: np.ndarray
@@ -134,6 +141,13 @@ class KernelData(NamedTuple):
     pair_out_root: np.ndarray
     pair_side_reach2: np.ndarray
     pair_side_reach: np.ndarray
+    table_start: np.ndarray
+    table_joint: np.ndarray
+    table_n: np.ndarray
+    table_wrap: np.ndarray
+    table_lo: np.ndarray
+    table_step: np.ndarray
+    table: np.ndarray
 
 
 # ------------------------------------------------------------------ packed arrays ----
@@ -228,6 +242,13 @@ def unpack(f, i):
         _v2(f, i, 34),
         _v1(f, i, 35),
         _v1(f, i, 36),
+        _v1(i, i, 37),
+        _v2(i, i, 38),
+        _v2(i, i, 39),
+        _v2(i, i, 40),
+        _v2(f, i, 41),
+        _v2(f, i, 42),
+        _v1(f, i, 43),
     )
 
 
@@ -400,6 +421,29 @@ SELF_UNKNOWN = -1.0  # ``_classify_one``'s radius for an UNKNOWN of the robot's 
 
 
 @njit(cache=True, _nrt=False, inline="always")
+def table_clearance(d, p, q):
+    """The clearance body pair p keeps at the arm configuration q (D,) by its table (m, in the
+    units of ``speed``'s bounds; see ``KernelData``), 0 when it has no table or q lies outside
+    it (or is not finite): then its spheres decide."""
+    start = d.table_start[p]
+    if start < 0:
+        return 0.0
+    index = 0
+    for k in range(2):
+        j = d.table_joint[p, k]
+        if j < 0:
+            break
+        n = d.table_n[p, k]
+        x = (q[j] - d.table_lo[p, k]) / d.table_step[p, k]
+        if d.table_wrap[p, k] != 0:
+            x -= n * np.floor(x / n)
+        if not (x >= 0.0 and x < n):
+            return 0.0
+        index = index * n + int(x)
+    return d.table[start + index]
+
+
+@njit(cache=True, _nrt=False, inline="always")
 def _classify_one(q, d, stop_at_unknown, work, lam):
     """(verdict, radius) for the arm configuration q (D,): FREE, COLLIDING or UNKNOWN, and for
     a FREE one how far (rad, joint-space L2) q may move along a direction whose bodies' speed
@@ -512,6 +556,11 @@ def _classify_one(q, d, stop_at_unknown, work, lam):
         a_body = d.body_pair[p, 0]
         b_body = d.body_pair[p, 1]
         speed = lam[len(d.body_step) + p]
+        clear = table_clearance(d, p, q)
+        if clear > 0.0:  # the pair's table proves it apart here: no sphere test
+            if speed > 0.0:
+                radius = min(radius, clear / speed)
+            continue
         gap2 = _gap2(bodies, a_body, bodies, b_body)
         if gap2 >= d.body_pair_reach2[p]:
             if speed > 0.0:

@@ -35,6 +35,8 @@ from pydrake.multibody.tree import BodyIndex
 from planning.collision import sphere_kernel as _kernel
 from planning.collision.checker import speed_walk
 from planning.collision.hull_kernel import HullData, prove_free_packed
+from planning.collision.pair_tables import kernel_fields
+from planning.collision.self_pairs import OwnPairs
 from planning.collision.sphere_arrays import (
     Filters,
     body_groups,
@@ -91,6 +93,7 @@ class SphereCollisionModel:
         self._alive = {}  # signature name -> the objects it names (see ``sync``)
         self._stale_version = None  # the scene's version whose robot part sync left undone
         self.supported = True
+        self._never: set[frozenset] | None = None  # own pairs never close, once known
         try:
             query = checker.MakeStandaloneModelContext().GetQueryObject()
             bodies = [
@@ -103,6 +106,10 @@ class SphereCollisionModel:
             self._bodies = [*self._robot, self._attachment]
             self._unfiltered = _unfiltered_in_model(plant, query.inspector(), self._bodies)
             self._kin = BatchedKinematics(plant, self._bodies)
+            self._own = OwnPairs(
+                plant, scene.model.arm_indices, set(self._robot) - {self._attachment}
+            )
+            self._never: set[frozenset] | None = None  # own pairs never close, once known
         except NotImplementedError:
             self.supported = False
         self.sync()
@@ -160,6 +167,13 @@ class SphereCollisionModel:
                 self._alive["held"] = objects[1]
             if signature[1:] != self._robot_signature:  # the robot's part: held objects, fingers
                 self._robot_data = self._robot_kernel_arrays()
+                if self._never is None:  # once: then the arrays without them, with the tables
+                    self._never = self._own.never(
+                        self._kernel_robot(), self._hull_data, self._present
+                    )
+                    if self._never:
+                        self._build_robot(held)
+                    self._robot_data = self._robot_kernel_arrays()
                 self._robot_signature = signature[1:]
                 self._alive["robot"] = objects[1]
             self._data = KernelData(**self._robot_data, objects=primitives(world.values()))
@@ -190,14 +204,23 @@ class SphereCollisionModel:
         for steps, points in _FOLDED:
             arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
         self._hull_data = folded_hulls(self._hull_raw, offsets, geometry_speed)
-        return dict(
+        out = dict(
             zip(("parent", "kind", "q_index", "terms"), tree, strict=True),
             template=template,
             arm=arm,
             **arrays,
             speed=np.ascontiguousarray(speed),
             **{name: np.sqrt(np.maximum(arrays[squared], 0.0)) for name, squared in _ROOTS.items()},
+            **kernel_fields([None] * len(arrays["body_pair"])),
         )
+        if self._never is not None:  # the own pairs' clearance tables (``pair_tables``)
+            tables = self._own.tables(self._kernel_robot(out), self._hull_data, self._present)
+            out.update(kernel_fields(tables))
+        return out
+
+    def _kernel_robot(self, robot_data: dict | None = None) -> KernelData:
+        """``KernelData`` of the robot's part (``_robot_data``, or ``robot_data``) alone."""
+        return KernelData(**(robot_data or self._robot_data), objects=primitives(()))
 
     def _build_robot(self, held) -> None:
         """Remakes the robot's arrays (``sphere_arrays``) for the held objects ``held``."""
@@ -247,7 +270,7 @@ class SphereCollisionModel:
         pairs = set()
         for i, a in enumerate(present):
             for b in present[i + 1 :]:
-                if self._filtered[a, b] != 0:
+                if self._filtered[a, b] != 0 or frozenset((a, b)) in (self._never or ()):
                     continue
                 # Shapes added to the checker (held objects, on the attachment body) are not in
                 # its SceneGraph model: only the checker's own filter applies to them.

@@ -25,6 +25,7 @@ import time
 
 import numpy as np
 
+from planning.collision import pair_tables
 from planning.collision.checker import CheckerAdapter, first_invalid_segment, swept_free
 from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.collision.spheres import FREE
@@ -125,9 +126,10 @@ class JointPathSearch:
 
     def warm_up_steps(self) -> list:
         """Everything the compiled search compiles, as named steps ``(name, callable)``: the
-        sphere covers, the search's entry points, the exact shapes' proofs and the batched
-        sphere checks (``planning.planner_kernels`` builds with them). Empty when the spheres
-        are disabled or cannot answer."""
+        sphere covers, the search's entry points, the exact shapes' proofs, the batched
+        sphere checks and the own pairs' clearance tables (``pair_tables``, made by another
+        robot's first model); ``planning.planner_kernels`` builds with them. Empty when the
+        spheres are disabled or cannot answer."""
         model = self._sphere_model()
         if model is None:
             return []
@@ -136,6 +138,9 @@ class JointPathSearch:
         steps += compiled_rrt.warm_up_steps(model.kernel_data(), *self.limits, self._hulls(model))
         steps.append(("the exact shapes' proofs", lambda: model.prove_free(middle)))
         steps.append(("the batched sphere checks", lambda: model.classify(middle)))
+        none = np.zeros(0, dtype=np.int64)  # no pair: compiles the tables' distances alone
+        packed = (*model.packed_data(), *model.packed_hulls(), none)
+        steps.append(("the clearance tables", lambda: pair_tables.clearances(middle, *packed)))
         return steps
 
     def proves_free(self, q, *, first: bool = True) -> bool:

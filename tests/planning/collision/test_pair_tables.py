@@ -1,0 +1,94 @@
+"""Clearance tables of the robot's own pairs (``pair_tables``): on a two-joint arm whose arm
+link can swing into its base plate, every value the table gives is a clearance Drake's exact
+distance keeps (across the continuous joint's wrap too), the table decides most configurations,
+and the sphere model with the table never calls a colliding configuration free."""
+
+import numpy as np
+import pytest
+
+from planning import PlanningConfig, PlanningScene
+from planning.collision import pair_tables
+from planning.collision.sphere_kernel import COLLIDING, FREE, table_clearance
+from planning.collision.spheres import SphereCollisionModel
+from planning.model.model_config import RobotModelConfig
+from tests.robot_helpers import make_elbow_robot
+
+
+def _scene(folder, lift_upper):
+    description = make_elbow_robot(folder, lift_upper)
+    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
+                                        table=None))  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def elbow(tmp_path_factory):
+    return _scene(tmp_path_factory.mktemp("elbow"), 1.5)
+
+
+def _pair_distance(scene, q) -> float:
+    """Drake's signed distance between the plate's and the arm's collision shapes at q."""
+    plant, graph = scene.plant, scene.model.scene_graph
+    context = scene.model.diagram.CreateDefaultContext()
+    plant.SetPositions(plant.GetMyContextFromRoot(context), scene.full_q(q))
+    query = graph.get_query_output_port().Eval(graph.GetMyContextFromRoot(context))
+    (a,) = plant.GetCollisionGeometriesForBody(plant.GetBodyByName("base"))
+    (b,) = plant.GetCollisionGeometriesForBody(plant.GetBodyByName("arm"))
+    return query.ComputeSignedDistancePairClosestPoints(a, b).distance
+
+
+def _configurations(n, lift_upper, seed=0):
+    rng = np.random.default_rng(seed)  # the pan joint beyond one turn: the cells wrap
+    return np.column_stack([rng.uniform(-5.0, 5.0, n), rng.uniform(-1.5, lift_upper, n)])
+
+
+def test_every_table_value_is_a_clearance_drake_keeps(elbow):
+    model = SphereCollisionModel(elbow)
+    d = model.kernel_data()
+    assert len(d.body_pair) == 1 and d.table_start[0] == 0  # plate and arm, tabulated
+    assert d.table_wrap[0].tolist() == [1, 0]  # the continuous pan wraps, the lift does not
+    assert d.table_n[0, 0] * d.table_n[0, 1] == len(d.table)
+    qs = _configurations(1500, 1.5)
+    values = np.array([table_clearance(d, 0, q) for q in qs])
+    distances = np.array([_pair_distance(elbow, q) for q in qs])
+    assert np.all(distances[values > 0.0] >= values[values > 0.0])
+    assert np.any(distances < 0.0)  # the arm does reach the plate
+    assert np.mean(values > 0.0) > 0.5  # most configurations need no sphere test of the pair
+    # Undecided only near contact: a cell loses at most LOSS to the motion within it.
+    assert np.all(values[distances > 2 * pair_tables.LOSS] > 0.0)
+    # Outside the lift's limits, no cell: the spheres decide.
+    assert table_clearance(d, 0, np.array([0.0, 1.6])) == 0.0
+    assert table_clearance(d, 0, np.array([np.nan, 0.0])) == 0.0
+
+
+def test_the_model_with_its_table_agrees_with_drake(elbow):
+    model = SphereCollisionModel(elbow)
+    qs = _configurations(1500, 1.5, seed=1)
+    verdicts = model.classify(qs)
+    colliding = np.array([not elbow.is_collision_free(q) for q in qs])
+    assert not np.any(colliding & (verdicts == FREE))
+    assert not np.any(~colliding & (verdicts == COLLIDING))
+    assert np.mean(verdicts[~colliding] == FREE) > 0.8
+
+
+def test_kernel_fields_lay_the_tables_end_to_end():
+    one = [np.array([v]) for v in (1, 3, False, -1.0, 0.5)]
+    table = pair_tables.PairTable(*one, np.array([0.1, 0.0, 0.2]))
+    fields = pair_tables.kernel_fields([None, table, table])
+    assert fields["table_start"].tolist() == [-1, 0, 3]
+    assert fields["table_joint"].tolist() == [[-1, -1], [1, -1], [1, -1]]
+    assert fields["table_n"].tolist() == [[1, 1], [3, 1], [3, 1]]
+    assert fields["table"].tolist() == [0.1, 0.0, 0.2, 0.1, 0.0, 0.2]
+    empty = pair_tables.kernel_fields([])
+    assert empty["table"].shape == (0,) and empty["table_joint"].shape == (0, 2)
+
+
+def test_a_table_is_made_once_then_read_from_the_cache(elbow, monkeypatch):
+    model = SphereCollisionModel(elbow)
+    before = model.kernel_data().table.copy()
+
+    def refuse(*args):
+        raise AssertionError("tabulated again")
+
+    monkeypatch.setattr(pair_tables, "pair_table", refuse)
+    again = SphereCollisionModel(elbow).kernel_data().table
+    np.testing.assert_array_equal(again, before)
