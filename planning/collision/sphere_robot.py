@@ -205,3 +205,19 @@ def _save(path: Path, covers: dict[int, SphereSet]) -> None:
     )
     np.save(tmp, rows)
     tmp.replace(path)
+
+
+def unfiltered_in_model(plant, inspector, bodies) -> set[tuple[int, int]]:
+    """Pairs (a, b) of ``bodies`` (in that order) with a pair of collision geometries that the
+    SceneGraph model does not filter. Read once: later changes go to the checker's own filter
+    matrix (``allow_collision``, held objects) or concern shapes the checker adds, never the
+    model's robot geometries."""
+    geometries = {
+        b: plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b))) for b in bodies
+    }
+    return {
+        (a, b)
+        for i, a in enumerate(bodies)
+        for b in bodies[i + 1 :]
+        if any(not inspector.CollisionFiltered(g, h) for g in geometries[a] for h in geometries[b])
+    }

@@ -50,7 +50,13 @@ from planning.collision.sphere_batch import classify_many
 from planning.collision.sphere_cover import SphereSet
 from planning.collision.sphere_fk import BatchedKinematics, fold_fixed_steps, fold_points
 from planning.collision.sphere_kernel import COLLIDING, FREE, UNKNOWN, KernelData
-from planning.collision.sphere_robot import held_cover, robot_hulls, robot_spheres, shape_hull
+from planning.collision.sphere_robot import (
+    held_cover,
+    robot_hulls,
+    robot_spheres,
+    shape_hull,
+    unfiltered_in_model,
+)
 
 __all__ = ["COLLIDING", "FREE", "UNKNOWN", "SphereCollisionModel"]
 # (step, point) arrays of the kernel data whose points are fixed on kinematic steps.
@@ -104,7 +110,7 @@ class SphereCollisionModel:
             self._robot = robot_spheres(plant, query.inspector(), bodies, slack)
             self._hulls = robot_hulls(plant, query.inspector(), bodies)
             self._bodies = [*self._robot, self._attachment]
-            self._unfiltered = _unfiltered_in_model(plant, query.inspector(), self._bodies)
+            self._unfiltered = unfiltered_in_model(plant, query.inspector(), self._bodies)
             self._kin = BatchedKinematics(plant, self._bodies)
             self._own = OwnPairs(
                 plant, scene.model.arm_indices, set(self._robot) - {self._attachment}
@@ -168,9 +174,8 @@ class SphereCollisionModel:
             if signature[1:] != self._robot_signature:  # the robot's part: held objects, fingers
                 self._robot_data = self._robot_kernel_arrays()
                 if self._never is None:  # once: then the arrays without them, with the tables
-                    self._never = self._own.never(
-                        self._kernel_robot(), self._hull_data, self._present
-                    )
+                    data, present = self._kernel_robot(), self._present
+                    self._never = self._own.never(data, self._hull_data, present)
                     if self._never:
                         self._build_robot(held)
                     self._robot_data = self._robot_kernel_arrays()
@@ -193,11 +198,8 @@ class SphereCollisionModel:
         # Panda than ``sphere_arrays.speed_table``'s on the folded tree): of the points the
         # checks use, and of the exact shapes' points, farther out than the spheres' centres
         # (``shape_reach``) and within the spheres, which contain them (if the cover is loose).
-        columns, plant, present = (
-            {int(k): j for j, k in enumerate(arm)},
-            self._scene.plant,
-            self._present,
-        )
+        plant, present = self._scene.plant, self._present
+        columns = {int(k): j for j, k in enumerate(arm)}
         speed = speed_walk(plant, columns, dict(zip(present, self._point_norm, strict=True)))
         reach = np.maximum(self._shape_reach, self._sphere_reach)
         geometry_speed = speed_walk(plant, columns, dict(zip(present, reach, strict=True)))
@@ -395,19 +397,3 @@ def _motion(motion, qs: np.ndarray) -> np.ndarray:
     if motion is None:
         return np.zeros((0, qs.shape[1]))
     return np.array(np.broadcast_to(motion, qs.shape), dtype=float)  # writeable: one signature
-
-
-def _unfiltered_in_model(plant, inspector, bodies) -> set[tuple[int, int]]:
-    """Pairs (a, b) of ``bodies`` (in that order) with a pair of collision geometries that the
-    SceneGraph model does not filter. Read once: later changes go to the checker's own filter
-    matrix (``allow_collision``, held objects) or concern shapes the checker adds, never the
-    model's robot geometries."""
-    geometries = {
-        b: plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(b))) for b in bodies
-    }
-    return {
-        (a, b)
-        for i, a in enumerate(bodies)
-        for b in bodies[i + 1 :]
-        if any(not inspector.CollisionFiltered(g, h) for g in geometries[a] for h in geometries[b])
-    }

@@ -30,7 +30,6 @@ from planning.collision.checker import CheckerAdapter, first_invalid_segment, sw
 from planning.collision.sphere_checker import SphereCheckerAdapter, sphere_model
 from planning.collision.spheres import FREE
 from planning.errors import ErrorCode, PlanningError
-from planning.paths import path_length
 from planning.search import compiled_rrt
 from planning.search.rrt import rrt_connect
 from planning.search.shortcut import shortcut
@@ -76,14 +75,11 @@ class JointPathSearch:
         if search:
             after = opts.drake_fallback_after
             resolution = opts.search_resolution
+        refine = opts.refine_slack if self._refine_model() is not None else None
         return SphereCheckerAdapter(
-            self._scene,
-            resolution,
-            slack=opts.slack,
-            fallback_after=after,
-            refine_slack=opts.refine_slack if self._refine_model() is not None else None,
-            hulls=opts.hull_proofs and hulls,
-        )
+            self._scene, resolution, slack=opts.slack, fallback_after=after,
+            refine_slack=refine, hulls=opts.hull_proofs and hulls
+        )  # fmt: skip
 
     def _sphere_model(self):
         """The scene's sphere model when it can answer (enabled, all shapes covered), or None."""
@@ -138,8 +134,7 @@ class JointPathSearch:
         steps += compiled_rrt.warm_up_steps(model.kernel_data(), *self.limits, self._hulls(model))
         steps.append(("the exact shapes' proofs", lambda: model.prove_free(middle)))
         steps.append(("the batched sphere checks", lambda: model.classify(middle)))
-        none = np.zeros(0, dtype=np.int64)  # no pair: compiles the tables' distances alone
-        packed = (*model.packed_data(), *model.packed_hulls(), none)
+        packed = (*model.packed_data(), *model.packed_hulls(), np.zeros(0, dtype=np.int64))
         steps.append(("the clearance tables", lambda: pair_tables.clearances(middle, *packed)))
         return steps
 
@@ -214,7 +209,10 @@ class JointPathSearch:
             path = self._shortcut(adapter, path, deadline, rng)
         path, how = self._validated(fine, path, how, deadline, rng)
         if opts.kto.enabled and how != "straight":
-            path, how = self._refined(path, how)
+            from planning.search.kto import kto_shorter
+
+            speeds = opts.timing.max_velocity
+            path, how = kto_shorter(self._scene, path, how, speeds, self.adapter(), opts.validation)
         return path, how
 
     def _hulls(self, model) -> tuple[np.ndarray, np.ndarray]:
@@ -351,40 +349,16 @@ class JointPathSearch:
         """Shortcuts a path with ``shortcut.time_fraction`` of the time left."""
         opts = self._options.shortcut
         budget = opts.time_fraction * max(0.0, deadline - time.perf_counter())
-        return shortcut(
-            adapter,
-            path,
-            iterations=opts.iterations,
-            deadline=time.perf_counter() + budget,
-            rng=rng,
-        )
+        deadline = time.perf_counter() + budget
+        return shortcut(adapter, path, iterations=opts.iterations, deadline=deadline, rng=rng)
 
     def _rrt(self, adapter, q_a, q_b, *, deadline: float, rng, step=None) -> np.ndarray | None:
         """RRT-Connect (``planning.search.rrt``) with ``rrt.batch`` extensions per query."""
         opts = self._options.rrt
         return rrt_connect(
-            adapter,
-            q_a,
-            q_b,
-            step=step or opts.step,
-            goal_bias=opts.goal_bias,
-            deadline=deadline,
-            rng=rng,
-            batch=opts.batch,
-            balance=opts.balance,
-        )
-
-    def _refined(self, path: np.ndarray, how: str) -> tuple[np.ndarray, str]:
-        from planning.search.kto import kto_refine
-
-        max_velocity = np.asarray(self._options.timing.max_velocity)
-        dense = kto_refine(self._scene, path, max_velocity=max_velocity)
-        if dense is None or path_length(dense) >= path_length(path):
-            return path, how
-        fine = self._options.validation
-        if first_invalid_segment(self.adapter(), dense, fine.resolution, fine.swept) is not None:
-            return path, how
-        return dense, how + "+kto"
+            adapter, q_a, q_b, step=step or opts.step, goal_bias=opts.goal_bias,
+            deadline=deadline, rng=rng, batch=opts.batch, balance=opts.balance
+        )  # fmt: skip
 
     def _validated(self, fine, path, how, deadline, rng) -> tuple[np.ndarray, str]:
         """Re-checks the path at the fine resolution; re-plans a failing segment with

@@ -18,6 +18,21 @@ from pydrake.planning import KinematicTrajectoryOptimization
 from pydrake.solvers import Solve
 from pydrake.trajectories import BsplineTrajectory
 
+from planning.collision.checker import first_invalid_segment
+from planning.paths import path_length
+
+
+def kto_shorter(scene, path, how: str, max_velocity, adapter, validation) -> tuple[np.ndarray, str]:
+    """``kto_refine``'s path in place of ``path`` when it is shorter and free along its whole
+    length on ``adapter`` (``validation``'s resolution and swept check), with "+kto" added to
+    ``how``; else ``path`` and ``how`` as they were."""
+    dense = kto_refine(scene, path, max_velocity=np.asarray(max_velocity))
+    if dense is None or path_length(dense) >= path_length(path):
+        return path, how
+    if first_invalid_segment(adapter, dense, validation.resolution, validation.swept) is not None:
+        return path, how
+    return dense, how + "+kto"
+
 
 def kto_refine(
     scene,

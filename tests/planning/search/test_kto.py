@@ -87,3 +87,16 @@ def test_a_start_in_collision_gives_none(scene, ends):
     assert not scene.is_collision_free(colliding)
     path = np.vstack([colliding, ends[1]])
     assert mut.kto_refine(scene, path, max_velocity=V_MAX, control_points=8) is None
+
+
+def test_kto_shorter_keeps_the_shorter_free_path(scene, ends):
+    from planning.collision.checker import CheckerAdapter
+    from planning.planner_options import ValidationOptions
+
+    adapter, validation = CheckerAdapter(scene), ValidationOptions()
+    seed_path = detour(ends, 0.3 * E[1])
+    path, how = mut.kto_shorter(scene, seed_path, "rrt_connect", V_MAX, adapter, validation)
+    assert how == "rrt_connect+kto" and path_length(path) < path_length(seed_path)
+    straight = np.vstack(ends)  # nothing shorter: kept as it is
+    path, how = mut.kto_shorter(scene, straight, "rrt_connect", V_MAX, adapter, validation)
+    assert how == "rrt_connect" and path is straight
