@@ -70,14 +70,11 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
             where that is one turn of a revolute joint.
         sphere_speed: ``KernelData.speed`` (L, D), the spheres' speed bounds.
     """
-    moves = (h.speed[a] > 0.0) != (h.speed[b] > 0.0)
-    joints = np.flatnonzero(moves)
-    if not 1 <= len(joints) <= 2 or not np.all(np.isfinite(low[joints] + high[joints])):
+    joints = _joints(h, a, b, low, high, sphere_speed)
+    if joints is None:
         return None
     slope = h.speed[a, joints] + h.speed[b, joints]
     sphere_slope = sphere_speed[a, joints] + sphere_speed[b, joints]
-    if not (np.all(np.isfinite(slope)) and np.all(sphere_slope > 0.0)):
-        return None
     scale = max(1.0, float(np.max(slope / sphere_slope)))
     span = high[joints] - low[joints]
     n = np.maximum(1, np.ceil(span * slope * len(joints) / (2.0 * LOSS))).astype(np.int64)
@@ -96,17 +93,49 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
     return PairTable(joints, n, wrap[joints], low[joints], step, values)
 
 
-def cached_pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | None:
-    """``pair_table``, read from the cache when the same inputs were tabulated before (a table
-    takes ~1-5 s); keyed by the kinematics, the pair's shapes, thresholds, speeds and box."""
-    digest = hashlib.sha256(Path(__file__).read_bytes())
+def _joints(h, a, b, low, high, sphere_speed) -> np.ndarray | None:
+    """The joints (arm columns) body pair (a, b)'s distance depends on, those moving one of
+    them and not the other; None when a table cannot be had: more than two, a box that is not
+    finite, no speed bound."""
+    joints = np.flatnonzero((h.speed[a] > 0.0) != (h.speed[b] > 0.0))
+    if not 1 <= len(joints) <= 2 or not np.all(np.isfinite(low[joints] + high[joints])):
+        return None
+    slope = h.speed[a, joints] + h.speed[b, joints]
+    sphere_slope = sphere_speed[a, joints] + sphere_speed[b, joints]
+    if not (np.all(np.isfinite(slope)) and np.all(sphere_slope > 0.0)):
+        return None
+    return joints
+
+
+def table_key(d, h, rows, a, b, low, high, wrap, sphere_speed) -> str | None:
+    """What ``pair_table`` reads for body pair (a, b), as a digest (its cache key), or None when
+    the pair cannot have a table (more than two joints, no finite box, no speed bound): the
+    pair's shapes, thresholds, speeds and box, the kinematic steps from its shapes to the base
+    (not the rest: a finger's position elsewhere leaves the key as it is) and this code."""
+    if _joints(h, a, b, low, high, sphere_speed) is None:
+        return None
     shapes = sorted({int(g) for g in h.pair[rows].ravel()})
-    parts = [d.parent, d.kind, d.q_index, d.terms, h.pair[rows], h.pair_gap[rows], low, high, wrap]
-    parts += [h.speed[[a, b]], sphere_speed[[a, b]], h.geom_step[shapes], h.geom_radius[shapes]]
+    steps = set()
+    for step in h.geom_step[shapes]:
+        while step >= 0 and step not in steps:
+            steps.add(int(step))
+            step = d.parent[step]
+    steps = sorted(steps)
+    digest = hashlib.sha256(Path(__file__).read_bytes())
+    parts = [steps, d.parent[steps], d.kind[steps], d.q_index[steps], d.terms[steps], d.arm]
+    parts += [h.pair[rows], h.pair_gap[rows], low, high, wrap, h.speed[[a, b]]]
+    parts += [sphere_speed[[a, b]], h.geom_step[shapes], h.geom_radius[shapes]]
     parts += [h.vert[h.vert_start[g] : h.vert_start[g + 1]] for g in shapes]
     for part in parts:
         digest.update(np.ascontiguousarray(part, dtype=float).tobytes())
-    path = cache_dir() / "pair_tables" / f"{digest.hexdigest()[:16]}.npz"
+    return digest.hexdigest()[:16]
+
+
+def cached_pair_table(key: str, d, h, rows, a, b, low, high, wrap, sphere_speed):
+    """``pair_table`` (a ``PairTable`` or None), read from the cache under ``key``
+    (``table_key``) when the pair was tabulated before (a table takes ~1-10 s), else made
+    and written there."""
+    path = cache_dir() / "pair_tables" / f"{key}.npz"
     try:
         with np.load(path) as saved:
             if not saved["some"]:

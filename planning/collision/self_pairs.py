@@ -38,7 +38,7 @@ from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import cache_dir
 from planning.collision.hull_kernel import HullData, prove_free_packed
-from planning.collision.pair_tables import PairTable, cached_pair_table
+from planning.collision.pair_tables import PairTable, cached_pair_table, table_key
 from planning.collision.sphere_kernel import pack
 
 MAX_JOINTS = 2  # a pair's joints: cells grow as the cells per joint to this power
@@ -80,7 +80,7 @@ class OwnPairs:
         self.lower = plant.GetPositionLowerLimits()[arm]
         self.upper = plant.GetPositionUpperLimits()[arm]
         self._never: set[frozenset] | None = None
-        self._tables: dict[tuple, PairTable | None] = {}
+        self._tables: dict[str, PairTable | None] = {}  # by ``pair_tables.table_key``
 
     def never(self, d, h: HullData, present) -> set[frozenset]:
         """The own pairs (plant indices) proven apart at every configuration (``never_close``
@@ -93,8 +93,8 @@ class OwnPairs:
 
     def tables(self, d, h: HullData, present) -> list[PairTable | None]:
         """A clearance table (or None) for each of ``d.body_pair``'s rows: pairs of the robot's
-        bodies, a joint outside the group (a finger, the head) at the scene's position (its
-        table kept for those positions: ``d.template``)."""
+        bodies, a joint outside the group on the way (a finger, the head) at the scene's
+        position (``pair_tables.table_key`` then differs with that position)."""
         low, high, wrap = domain(self.lower, self.upper, self.revolute)
         shape_rows: dict[frozenset, list[int]] = {}
         for r, (g, e) in enumerate(h.pair):
@@ -102,16 +102,13 @@ class OwnPairs:
             shape_rows.setdefault(key, []).append(r)
         out = []
         for a, b in d.body_pair:
-            key = (frozenset((present[a], present[b])), d.template.tobytes())
-            if key not in self._tables:
-                rows = shape_rows.get(frozenset((int(a), int(b))))
-                robot = present[a] in self.bodies and present[b] in self.bodies
-                self._tables[key] = (
-                    cached_pair_table(d, h, rows, a, b, low, high, wrap, d.speed)
-                    if robot and rows
-                    else None
-                )
-            out.append(self._tables[key])
+            rows = shape_rows.get(frozenset((int(a), int(b))))
+            robot = present[a] in self.bodies and present[b] in self.bodies
+            args = (d, h, rows, a, b, low, high, wrap, d.speed)
+            key = table_key(*args) if robot and rows else None
+            if key is not None and key not in self._tables:
+                self._tables[key] = cached_pair_table(key, *args)
+            out.append(None if key is None else self._tables[key])
         return out
 
 
