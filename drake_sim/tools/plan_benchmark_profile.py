@@ -28,7 +28,7 @@ from pydrake.planning import CollisionChecker
 
 from planning.collision.spheres import SphereCollisionModel
 from planning.motion_planner import MotionPlanner
-from planning.search import compiled_rrt
+from planning.search import compiled_rrt, kto
 from planning.search.joint_path import JointPathSearch
 
 # (owner, method, stage): the steps of a request, each named after what its code does.
@@ -43,7 +43,7 @@ STAGES = (
     (JointPathSearch, "_rrt", "rrt-connect"),  # tree growth on coarse (0.1 rad) edges
     (JointPathSearch, "_shortcut", "shortcut"),
     (JointPathSearch, "_validated", "validate 0.01 rad"),  # fine re-check, repairs nested
-    (JointPathSearch, "_refined", "kto"),
+    (kto, "kto_shorter", "kto"),  # looked up when called: the wrapper is seen
 )
 # (owner, method, kind): the collision checks, charged to the stage that called them.
 CHECKS = (
