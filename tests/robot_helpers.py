@@ -191,9 +191,16 @@ ELBOW_URDF = """<?xml version="1.0"?>
     <origin xyz="0 0 0.35"/><axis xyz="0 1 0"/>
     <limit lower="-1.5" upper="{lift_upper}" velocity="1" effort="1"/></joint>
   <joint name="tip" type="fixed"><parent link="arm"/><child link="tool"/>
-    <origin xyz="0.4 0 0"/></joint>
+    <origin xyz="0.4 0 0"/></joint>{finger}
 </robot>
 """
+
+ELBOW_FINGER = """
+  <link name="finger"><collision><geometry><box size="0.02 0.02 0.02"/></geometry></collision>
+  </link>
+  <joint name="slide" type="prismatic"><parent link="arm"/><child link="finger"/>
+    <origin xyz="0.42 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="0" upper="0.05" velocity="1" effort="1"/></joint>"""
 
 ELBOW_SRDF = """<?xml version="1.0"?>
 <robot name="elbow">
@@ -204,14 +211,16 @@ ELBOW_SRDF = """<?xml version="1.0"?>
 """
 
 
-def make_elbow_robot(folder: Path, lift_upper: float) -> Path:
+def make_elbow_robot(folder: Path, lift_upper: float, *, finger: bool = False) -> Path:
     """Writes a two-joint arm of boxes (a post turning on a plate, an arm lifting on the post)
     and its description YAML into ``folder``; returns the YAML's path. Its only checked pair,
     plate and arm, depends on both joints (the post turns off the plate's centre): with
     ``lift_upper`` 1.5 rad the arm's far end reaches the plate when turned over it, with 0.3
-    rad it stays about 10 cm above."""
+    rad it stays about 10 cm above. With ``finger``, a small block slides on the arm's end
+    (joint ``slide``, outside the group)."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "elbow.urdf").write_text(ELBOW_URDF.format(lift_upper=lift_upper))
+    urdf = ELBOW_URDF.format(lift_upper=lift_upper, finger=ELBOW_FINGER if finger else "")
+    (folder / "elbow.urdf").write_text(urdf)
     (folder / "elbow.srdf").write_text(ELBOW_SRDF)
     description = folder / "elbow.yaml"
     description.write_text("urdf: elbow.urdf\nsrdf: elbow.srdf\ngroup: arm\n")

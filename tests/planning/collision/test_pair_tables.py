@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from planning import PlanningConfig, PlanningScene
-from planning.collision import pair_tables
+from planning.collision import pair_tables, self_pairs
 from planning.collision.sphere_kernel import COLLIDING, FREE, table_clearance
 from planning.collision.spheres import SphereCollisionModel
 from planning.model.model_config import RobotModelConfig
@@ -92,3 +92,38 @@ def test_a_table_is_made_once_then_read_from_the_cache(elbow, monkeypatch):
     monkeypatch.setattr(pair_tables, "pair_table", refuse)
     again = SphereCollisionModel(elbow).kernel_data().table
     np.testing.assert_array_equal(again, before)
+
+
+def test_a_joint_outside_the_group_changes_only_the_keys_of_pairs_it_moves(tmp_path):
+    """A table is kept for the positions of the joints outside the group on its pair's way (a
+    finger): moving the finger makes a new key for the plate and the finger, not for the plate
+    and the arm."""
+    scene = _scene_with_finger(tmp_path)
+    model = SphereCollisionModel(scene)
+    plant = scene.plant
+    names = {int(i): plant.get_body(i).name() for i in plant.GetBodyIndices(scene.model.instance)}
+
+    def keys():
+        d, h, present = model.kernel_data(), model.hull_data(), model._present
+        low, high, wrap = self_pairs.domain(model._own.lower, model._own.upper,
+                                            model._own.revolute)  # fmt: skip
+        out = {}
+        for a, b in d.body_pair:
+            rows = [r for r, (g, e) in enumerate(h.pair)
+                    if {int(h.geom_body[g]), int(h.geom_body[e])} == {int(a), int(b)}]  # fmt: skip
+            pair = frozenset((names[present[a]], names[present[b]]))
+            out[pair] = pair_tables.table_key(d, h, rows, a, b, low, high, wrap, d.speed)
+        return out
+
+    before = keys()
+    scene.set_positions({"slide": 0.04})
+    after = keys()
+    plate_arm, plate_finger = frozenset(("base", "arm")), frozenset(("base", "finger"))
+    assert before[plate_arm] is not None and before[plate_arm] == after[plate_arm]
+    assert before[plate_finger] is not None and before[plate_finger] != after[plate_finger]
+
+
+def _scene_with_finger(folder):
+    description = make_elbow_robot(folder, 1.5, finger=True)
+    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
+                                        table=None))  # fmt: skip
