@@ -1,10 +1,10 @@
-"""RobotState: the Panda's joints, forward and inverse kinematics, and live state from a diagram.
+"""RobotState: a robot's joints, forward and inverse kinematics, and live state from a diagram.
 
 ``RobotState`` holds a current configuration (like MoveIt's ``RobotState``) on a
 ``PlanningScene``. ``RobotStateReader`` is a LeafSystem that a running diagram feeds with the
-Panda's positions (or its full state); ``RobotState.read(root_context)`` then returns the
-latest joints, and ``RobotState.read_plant_context`` does the same from any plant context that
-holds a Panda.
+robot's positions (or its full state), in the order of the scene's plant (the Panda's: 7 arm
+joints, then 2 fingers); ``RobotState.read(root_context)`` then returns the latest joints, and
+``RobotState.read_plant_context`` does the same from any plant context that holds the robot.
 """
 
 from __future__ import annotations
@@ -16,12 +16,11 @@ from pydrake.systems.framework import LeafSystem
 
 from planning.config import IkOptions
 from planning.errors import ErrorCode, PlanningError
-from planning.model.layout import NUM_POSITIONS, NUM_STATES
 from planning.search.ik import IkResult, IkSolver
 
 
 class RobotStateReader(LeafSystem):
-    """Receives the Panda's positions from a running diagram and outputs the end-effector pose.
+    """Receives the robot's positions from a running diagram and outputs the end-effector pose.
 
     .. pydrake_system::
 
@@ -32,35 +31,38 @@ class RobotStateReader(LeafSystem):
         - q
         - X_WE
 
-    ``panda_state`` is a vector whose first 9 entries are the Panda's positions (7 arm joints in
-    rad, 2 fingers in m), e.g. a plant's ``panda_state`` output port (18 values) or a
-    9-position vector; ``q`` passes those 9 through and ``X_WE`` (an abstract RigidTransform)
-    is the pose of the end-effector frame E in the world frame W.
+    ``panda_state`` (the name kept from the Panda's stations) is a vector whose first N entries
+    are the positions of ``plant`` (N = ``plant.num_positions()``: the Panda's 7 arm joints in
+    rad and 2 fingers in m), e.g. a station's ``panda.state`` output (positions then
+    velocities, 2N values, the default ``input_size``) or N positions; ``q`` passes those N
+    through and ``X_WE`` (an abstract RigidTransform) is the pose of the end-effector frame E
+    in the world frame W.
     """
 
-    def __init__(self, *, plant, frame, input_size: int = NUM_STATES):
+    def __init__(self, *, plant, frame, input_size: int | None = None):
         super().__init__()
-        if input_size < NUM_POSITIONS:
-            raise ValueError(
-                f"panda_state needs at least {NUM_POSITIONS} values, got input_size={input_size}"
-            )
+        n = plant.num_positions()
+        input_size = 2 * n if input_size is None else input_size
+        if input_size < n:
+            raise ValueError(f"panda_state needs at least {n} values, got input_size={input_size}")
+        self._n = n
         self._plant = plant
         self._frame = frame
         self._plant_context = plant.CreateDefaultContext()
         self._input = self.DeclareVectorInputPort("panda_state", input_size)
-        self.DeclareVectorOutputPort("q", NUM_POSITIONS, self.CalcQ)
+        self.DeclareVectorOutputPort("q", n, self.CalcQ)
         self.DeclareAbstractOutputPort("X_WE", lambda: Value(RigidTransform()), self.CalcPose)
 
     def CalcQ(self, context, output) -> None:
-        output.SetFromVector(self._input.Eval(context)[:NUM_POSITIONS])
+        output.SetFromVector(self._input.Eval(context)[: self._n])
 
     def CalcPose(self, context, output) -> None:
-        self._plant.SetPositions(self._plant_context, self._input.Eval(context)[:NUM_POSITIONS])
+        self._plant.SetPositions(self._plant_context, self._input.Eval(context)[: self._n])
         output.set_value(self._frame.CalcPoseInWorld(self._plant_context))
 
 
 class RobotState:
-    """A Panda configuration on a planning scene, with kinematics.
+    """A configuration of the scene's robot (its planning group), with kinematics.
 
     Args:
         scene: the ``PlanningScene`` (robot model, objects, collision checker).
@@ -110,16 +112,18 @@ class RobotState:
         return named[name].copy()
 
     def fk(self, q=None, frame: str | None = None) -> RigidTransform:
-        """Returns X_WF, the pose of a Panda frame F (the end effector by default) at q.
+        """Returns X_WF, the pose of a frame F of the robot (the end effector by default) at q.
 
         Args:
-            q: 7 or 9 positions; the current configuration when None.
-            frame: a frame name of the Panda, e.g. "panda_hand" or "panda_link7".
+            q: the group's positions or all of the plant's (the Panda's 7 or 9); the current
+                configuration when None.
+            frame: a frame name of the robot, e.g. the Panda's "panda_hand" or "panda_link7".
         """
         plant, scene = self._scene.plant, self._scene
         name = frame or self._ee_frame
         if not plant.HasFrameNamed(name, scene.model.instance):
-            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the Panda has no frame {name!r}")
+            robot = scene.model.robot.name
+            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the robot {robot} has no frame {name!r}")
         plant.SetPositions(self._context, self._q if q is None else scene.full_q(q))
         return plant.GetFrameByName(name, scene.model.instance).CalcPoseInWorld(self._context)
 
@@ -178,8 +182,9 @@ class RobotState:
             self._ik = IkSolver(self._scene)
         return self._ik
 
-    def make_reader(self, input_size: int = NUM_STATES) -> RobotStateReader:
-        """Returns a new ``RobotStateReader`` to add to a diagram; ``read`` uses it after."""
+    def make_reader(self, input_size: int | None = None) -> RobotStateReader:
+        """Returns a new ``RobotStateReader`` to add to a diagram (``input_size``: the
+        positions and velocities of the scene's plant when None); ``read`` uses it after."""
         plant = self._scene.plant
         frame = plant.GetFrameByName(self._ee_frame, self._scene.model.instance)
         self._reader = RobotStateReader(plant=plant, frame=frame, input_size=input_size)
@@ -188,8 +193,8 @@ class RobotState:
     def read(self, root_context) -> tuple[np.ndarray, RigidTransform]:
         """Reads the latest configuration from the running diagram through the reader.
 
-        Sets the current configuration and returns (q, X_WE): the 7 arm joints (rad) and the
-        end-effector pose.
+        Sets the current configuration and returns (q, X_WE): the group's joints (rad or m) and
+        the end-effector pose.
         """
         if self._reader is None:
             raise RuntimeError("call make_reader() and wire its panda_state port first")
@@ -198,16 +203,21 @@ class RobotState:
         return self.q, self._reader.GetOutputPort("X_WE").Eval(context)
 
     def read_plant_context(self, plant, plant_context, model_instance=None):
-        """Reads the Panda's positions from a plant's context (any plant holding a Panda).
+        """Reads the robot's positions from a plant's context (any plant holding the robot).
 
         Args:
-            plant: the plant; its Panda is ``model_instance`` or the instance named "panda".
+            plant: the plant; its robot is ``model_instance`` or the instance named as in the
+                scene's plant ("panda" for the Panda).
             plant_context: that plant's context.
 
         Returns:
             (q, X_WE) as ``read``.
         """
         if model_instance is None:
-            model_instance = plant.GetModelInstanceByName("panda")
-        self.set_q(plant.GetPositions(plant_context, model_instance)[:NUM_POSITIONS])
+            ours = self._scene.plant
+            model_instance = plant.GetModelInstanceByName(
+                ours.GetModelInstanceName(self._scene.model.instance)
+            )
+        n = self._scene.plant.num_positions()
+        self.set_q(plant.GetPositions(plant_context, model_instance)[:n])
         return self.q, self.fk()

@@ -236,3 +236,31 @@ def test_reader_needs_the_panda_positions(scene):
     frame = scene.plant.GetFrameByName("panda_hand_tcp")
     with pytest.raises(ValueError, match="at least 9 values"):
         mut.RobotStateReader(plant=scene.plant, frame=frame, input_size=8)
+
+
+def test_reader_of_another_robot_takes_its_plant_positions(tmp_path):
+    """The reader is sized by the scene's plant, not the Panda's 9 positions: the two-joint
+    elbow arm's station state is 2 positions and 2 velocities."""
+    from planning import PlanningConfig
+    from planning.model.model_config import RobotModelConfig
+    from tests.robot_helpers import make_elbow_robot
+
+    description = make_elbow_robot(tmp_path, 1.5)
+    config = PlanningConfig(model=RobotModelConfig(description=str(description)), table=None)
+    scene = mut.PlanningScene(config)
+    state = mut.RobotState(scene)
+    q = np.array([0.4, -0.3])
+    builder = DiagramBuilder()
+    source = builder.AddSystem(ConstantVectorSource(np.concatenate([q, np.zeros(2)])))
+    reader = builder.AddSystem(state.make_reader())
+    builder.Connect(source.get_output_port(), reader.get_input_port())
+    context = builder.Build().CreateDefaultContext()
+    q_read, X_WE = state.read(context)
+    np.testing.assert_allclose(q_read, q)
+    assert X_WE.IsNearlyEqualTo(state.fk(q), 1e-12)
+    plant_context = scene.plant.CreateDefaultContext()
+    scene.plant.SetPositions(plant_context, -q)
+    q_read, _ = state.read_plant_context(scene.plant, plant_context)  # found by its name
+    np.testing.assert_allclose(q_read, -q)
+    with pytest.raises(ValueError, match="at least 2 values"):
+        mut.RobotStateReader(plant=scene.plant, frame=scene.plant.world_frame(), input_size=1)
