@@ -122,8 +122,8 @@ class RobotState:
         plant, scene = self._scene.plant, self._scene
         name = frame or self._ee_frame
         if not plant.HasFrameNamed(name, scene.model.instance):
-            robot = scene.model.robot.name
-            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, f"the robot {robot} has no frame {name!r}")
+            message = f"the robot {scene.model.robot.name} has no frame {name!r}"
+            raise PlanningError(ErrorCode.FRAME_NOT_FOUND, message)
         plant.SetPositions(self._context, self._q if q is None else scene.full_q(q))
         return plant.GetFrameByName(name, scene.model.instance).CalcPoseInWorld(self._context)
 

@@ -101,7 +101,7 @@ class KernelData(NamedTuple):
     each (1: none), ``table_wrap`` (Q, 2) 1 where the cells span one turn and wrap,
     ``table_lo``, ``table_step`` (Q, 2) the first cell's lower edge and the cells' width; a
     cell's value, when above 0, is a clearance (m, in the units of ``speed``'s bounds) the
-    pair keeps everywhere in it, so that pair needs no sphere test there (``_table_clearance``).
+    pair keeps everywhere in it, so that pair needs no sphere test there (``table_clearance``).
     """
 
     parent: np.ndarray

@@ -16,7 +16,9 @@ Which pairs are checked and their paddings are read from the scene's checker: a 
 checked when neither the checker's filtered collision matrix (the SRDF's disabled pairs, the
 welded base, held-object filters, ``allow_collision``) nor its SceneGraph model filters it, so
 they follow the model. Paddings below zero (a held object may touch the world) only loosen the
-inner test; the outer test uses at least zero.
+inner test; the outer test uses at least zero. The robot's own pairs proven apart everywhere are
+left out, and those with a clearance table skip their sphere tests where it proves them apart
+(``self_pairs``, ``pair_tables``).
 
 Costs: each body's spheres are cut into groups of up to ``sphere_arrays.GROUP`` neighbours with
 a bounding sphere; only groups (and group pairs) with anything near reach the per-sphere pass,
@@ -115,7 +117,6 @@ class SphereCollisionModel:
             self._own = OwnPairs(
                 plant, scene.model.arm_indices, set(self._robot) - {self._attachment}
             )
-            self._never: set[frozenset] | None = None  # own pairs never close, once known
         except NotImplementedError:
             self.supported = False
         self.sync()
