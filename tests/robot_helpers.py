@@ -225,3 +225,13 @@ def make_elbow_robot(folder: Path, lift_upper: float, *, finger: bool = False) -
     description = folder / "elbow.yaml"
     description.write_text("urdf: elbow.urdf\nsrdf: elbow.srdf\ngroup: arm\n")
     return description
+
+
+def elbow_scene(folder: Path, lift_upper: float, *, finger: bool = False):
+    """A ``PlanningScene`` of ``make_elbow_robot``'s arm (no table)."""
+    from planning import PlanningConfig, PlanningScene
+    from planning.model.model_config import RobotModelConfig
+
+    description = make_elbow_robot(folder, lift_upper, finger=finger)
+    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
+                                        table=None))  # fmt: skip

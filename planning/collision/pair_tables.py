@@ -70,11 +70,10 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
             where that is one turn of a revolute joint.
         sphere_speed: ``KernelData.speed`` (L, D), the spheres' speed bounds.
     """
-    joints = _joints(h, a, b, low, high, sphere_speed)
-    if joints is None:
+    found = _joints(h, a, b, low, high, sphere_speed)
+    if found is None:
         return None
-    slope = h.speed[a, joints] + h.speed[b, joints]
-    sphere_slope = sphere_speed[a, joints] + sphere_speed[b, joints]
+    joints, slope, sphere_slope = found
     scale = max(1.0, float(np.max(slope / sphere_slope)))
     span = high[joints] - low[joints]
     n = np.maximum(1, np.ceil(span * slope * len(joints) / (2.0 * LOSS))).astype(np.int64)
@@ -93,10 +92,11 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
     return PairTable(joints, n, wrap[joints], low[joints], step, values)
 
 
-def _joints(h, a, b, low, high, sphere_speed) -> np.ndarray | None:
-    """The joints (arm columns) body pair (a, b)'s distance depends on, those moving one of
-    them and not the other; None when a table cannot be had: more than two, a box that is not
-    finite, no speed bound."""
+def _joints(h, a, b, low, high, sphere_speed) -> tuple | None:
+    """(joints, slope, sphere_slope): the joints (arm columns) body pair (a, b)'s distance
+    depends on, those moving one of them and not the other, and how fast the pair's exact
+    shapes and its spheres may close per unit of each (m/rad); None when a table cannot be
+    had: more than two joints, a box that is not finite, no speed bound."""
     joints = np.flatnonzero((h.speed[a] > 0.0) != (h.speed[b] > 0.0))
     if not 1 <= len(joints) <= 2 or not np.all(np.isfinite(low[joints] + high[joints])):
         return None
@@ -104,7 +104,7 @@ def _joints(h, a, b, low, high, sphere_speed) -> np.ndarray | None:
     sphere_slope = sphere_speed[a, joints] + sphere_speed[b, joints]
     if not (np.all(np.isfinite(slope)) and np.all(sphere_slope > 0.0)):
         return None
-    return joints
+    return joints, slope, sphere_slope
 
 
 def table_key(d, h, rows, a, b, low, high, wrap, sphere_speed) -> str | None:

@@ -241,13 +241,9 @@ def test_reader_needs_the_panda_positions(scene):
 def test_reader_of_another_robot_takes_its_plant_positions(tmp_path):
     """The reader is sized by the scene's plant, not the Panda's 9 positions: the two-joint
     elbow arm's station state is 2 positions and 2 velocities."""
-    from planning import PlanningConfig
-    from planning.model.model_config import RobotModelConfig
-    from tests.robot_helpers import make_elbow_robot
+    from tests.robot_helpers import elbow_scene
 
-    description = make_elbow_robot(tmp_path, 1.5)
-    config = PlanningConfig(model=RobotModelConfig(description=str(description)), table=None)
-    scene = mut.PlanningScene(config)
+    scene = elbow_scene(tmp_path, 1.5)
     state = mut.RobotState(scene)
     q = np.array([0.4, -0.3])
     builder = DiagramBuilder()

@@ -6,23 +6,15 @@ and the sphere model with the table never calls a colliding configuration free."
 import numpy as np
 import pytest
 
-from planning import PlanningConfig, PlanningScene
 from planning.collision import pair_tables, self_pairs
 from planning.collision.sphere_kernel import COLLIDING, FREE, table_clearance
 from planning.collision.spheres import SphereCollisionModel
-from planning.model.model_config import RobotModelConfig
-from tests.robot_helpers import make_elbow_robot
-
-
-def _scene(folder, lift_upper):
-    description = make_elbow_robot(folder, lift_upper)
-    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
-                                        table=None))  # fmt: skip
+from tests.robot_helpers import elbow_scene
 
 
 @pytest.fixture(scope="module")
 def elbow(tmp_path_factory):
-    return _scene(tmp_path_factory.mktemp("elbow"), 1.5)
+    return elbow_scene(tmp_path_factory.mktemp("elbow"), 1.5)
 
 
 def _pair_distance(scene, q) -> float:
@@ -98,7 +90,7 @@ def test_a_joint_outside_the_group_changes_only_the_keys_of_pairs_it_moves(tmp_p
     """A table is kept for the positions of the joints outside the group on its pair's way (a
     finger): moving the finger makes a new key for the plate and the finger, not for the plate
     and the arm."""
-    scene = _scene_with_finger(tmp_path)
+    scene = elbow_scene(tmp_path, 1.5, finger=True)
     model = SphereCollisionModel(scene)
     plant = scene.plant
     names = {int(i): plant.get_body(i).name() for i in plant.GetBodyIndices(scene.model.instance)}
@@ -121,9 +113,3 @@ def test_a_joint_outside_the_group_changes_only_the_keys_of_pairs_it_moves(tmp_p
     plate_arm, plate_finger = frozenset(("base", "arm")), frozenset(("base", "finger"))
     assert before[plate_arm] is not None and before[plate_arm] == after[plate_arm]
     assert before[plate_finger] is not None and before[plate_finger] != after[plate_finger]
-
-
-def _scene_with_finger(folder):
-    description = make_elbow_robot(folder, 1.5, finger=True)
-    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
-                                        table=None))  # fmt: skip

@@ -5,22 +5,14 @@ the pair, and the joints' box is each joint's poses, once."""
 import numpy as np
 import pytest
 
-from planning import PlanningConfig, PlanningScene
 from planning.collision import self_pairs
 from planning.collision.spheres import FREE, SphereCollisionModel
-from planning.model.model_config import RobotModelConfig
-from tests.robot_helpers import make_elbow_robot
-
-
-def _scene(folder, lift_upper):
-    description = make_elbow_robot(folder, lift_upper)
-    return PlanningScene(PlanningConfig(model=RobotModelConfig(description=str(description)),
-                                        table=None))  # fmt: skip
+from tests.robot_helpers import elbow_scene
 
 
 @pytest.fixture(scope="module")
 def low_arm(tmp_path_factory):
-    return _scene(tmp_path_factory.mktemp("elbow_low"), 0.3)
+    return elbow_scene(tmp_path_factory.mktemp("elbow_low"), 0.3)
 
 
 def _plate_and_arm(scene):
@@ -39,7 +31,7 @@ def test_a_pair_that_never_comes_close_is_left_out(low_arm):
 
 
 def test_a_pair_that_can_touch_stays(tmp_path):
-    scene = _scene(tmp_path, 1.5)
+    scene = elbow_scene(tmp_path, 1.5)
     model = SphereCollisionModel(scene)
     assert model._never == set()
     assert len(model.kernel_data().body_pair) == 1
@@ -48,7 +40,7 @@ def test_a_pair_that_can_touch_stays(tmp_path):
 def test_a_proof_out_of_cells_keeps_the_pair(tmp_path, monkeypatch):
     monkeypatch.setattr(self_pairs, "BUDGET", 10)  # fewer than the first grid's 64 cells
     monkeypatch.setenv("DRAKE_SIM_CACHE", str(tmp_path / "cache"))  # no proof read back
-    scene = _scene(tmp_path / "robot", 0.3)
+    scene = elbow_scene(tmp_path / "robot", 0.3)
     assert SphereCollisionModel(scene)._never == set()
 
 
