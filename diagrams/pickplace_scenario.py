@@ -6,11 +6,12 @@ typed by the schema that part uses, and every value lives in one place:
 * ``scene`` (``planning.io.scene_files.SceneFile``): table, object, obstacle, place. When absent,
   the scene is read from ``scene_file`` (relative to the scenario file), by default
   ``config/pickplace.yaml``. The table lives here only.
-* ``robot`` (``planning.config.PlanningConfig``): the Panda's model (collision geometry,
+* ``robot`` (``planning.config.PlanningConfig``): the robot's model (the Panda by default, or any
+  description: ``model.description``; collision geometry,
   named configurations, disabled pairs) and IK, shared by the planner and the simulated station.
 * ``initial_configuration``: the named configuration the arm starts in (fingers open at
   ``robot.model.finger_position``).
-* ``station`` (``diagrams.panda_station.PandaStationConfig``): plant, gains, friction, viewer.
+* ``station`` (``diagrams.arm_station.ArmStationConfig``): plant, gains, friction, viewer.
 * ``planner`` (``planning.motion_planner.MotionPlannerOptions``), ``task``
   (``planning.task.options.PickPlaceOptions``), ``interface``
   (``planning.execution.options.InterfaceOptions``), and ``mode`` (physics or kinematic).
@@ -26,14 +27,14 @@ from pathlib import Path
 import yaml
 from pydrake.common.yaml import yaml_dump_typed
 
-from diagrams.panda_station import MODES, PandaStationConfig, validate_station_config
+from diagrams.arm_station import MODES, ArmStationConfig, station_layout, validate_station_config
 from drake_sim.base.config import apply_overrides, check_tree, load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.config import PlanningConfig, check_planning_config
 from planning.execution.options import InterfaceOptions
 from planning.io.scene_files import SceneFile
-from planning.model.planning_model import finger_defaults, named_configurations, robot_model
+from planning.model.planning_model import finger_defaults, named_configurations
 from planning.motion_planner import MotionPlannerOptions
 from planning.task.options import PickPlaceOptions
 
@@ -55,7 +56,11 @@ def _robot_without_table() -> PlanningConfig:
 
 @dc.dataclass
 class PickPlaceScenario:
-    """The Panda's pick-and-place: scene, robot, station, planner, task, interface and mode."""
+    """A pick-and-place: scene, robot, station, planner, task, interface and mode.
+
+    An arm without finger joints (the UR5 of VAMP's set) runs in the kinematic mode only; one
+    with a group of other than 7 joints needs ``station.arm_kp``, ``arm_kd`` and
+    ``arm_effort_limits`` of its size in the physics mode."""
 
     # Our scene YAML, relative to the scenario file; read when ``scene`` is not given.
     scene_file: str = "pickplace.yaml"
@@ -63,23 +68,16 @@ class PickPlaceScenario:
     robot: PlanningConfig = dc.field(default_factory=_robot_without_table)
     # Named configuration of ``robot.model`` (or the SRDF's) the arm starts in.
     initial_configuration: str = "ready"
-    station: PandaStationConfig = dc.field(default_factory=PandaStationConfig)
+    station: ArmStationConfig = dc.field(default_factory=ArmStationConfig)
     planner: MotionPlannerOptions = dc.field(default_factory=MotionPlannerOptions)
     task: PickPlaceOptions = dc.field(default_factory=PickPlaceOptions)
     interface: InterfaceOptions = dc.field(default_factory=InterfaceOptions)
     mode: str = "physics"  # "physics" (contact, grasp by friction) or "kinematic" (played back)
 
-    def station_config(self) -> PandaStationConfig:
+    def station_config(self) -> ArmStationConfig:
         """The station's config with the robot model, the scene and the start filled in."""
         if self.scene is None:
             raise ConfigError("scenario: no scene (load it with load_pickplace_scenario)")
-        robot = robot_model(self.robot.model)
-        if robot.name != "panda":
-            raise ConfigError(
-                f"scenario: robot.model.description {self.robot.model.description!r} is "
-                f"{robot.name}; the pick-and-place stations simulate the Panda only for now "
-                "(plan for other arms with planning.MotionPlanner: notebooks/own_arm.ipynb)"
-            )
         named = named_configurations(self.robot.model)
         q_arm = named.get(self.initial_configuration)
         if q_arm is None:
@@ -157,12 +155,21 @@ def check_scenario(scenario: PickPlaceScenario, where: str = "scenario") -> None
         scenario.planner.check()
     except ValueError as e:
         raise ConfigError(f"{where}: planner: {e}") from None
-    for section in ("task", "interface"):
-        block = getattr(scenario, section)
-        for field in dc.fields(block):
-            if not getattr(block, field.name) >= 0.0:
-                raise ConfigError(f"{where}: '{section}.{field.name}' must be >= 0")
-    validate_station_config(scenario.station_config())
+    try:
+        scenario.task.check("task.")
+    except ValueError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    for field in dc.fields(scenario.interface):
+        if not getattr(scenario.interface, field.name) >= 0.0:
+            raise ConfigError(f"{where}: 'interface.{field.name}' must be >= 0")
+    station = scenario.station_config()
+    layout = station_layout(station)
+    if scenario.mode == "physics" and not layout.num_fingers:
+        raise ConfigError(
+            f"{where}: {layout.robot} has no finger joints below its attach link: it grasps "
+            "in the kinematic mode only (mode: kinematic)"
+        )
+    validate_station_config(station, scenario.mode)
 
 
 def _refuse_filled_keys(tree, where: str) -> None:

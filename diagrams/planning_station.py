@@ -2,7 +2,7 @@
 
 ``make_planning_station`` is what a script or a notebook calls, with a pick-and-place scenario
 (``diagrams.pickplace_scenario``); a user who builds their own diagram adds the station with
-``make_panda_station_diagram`` and joins the interface with
+``make_arm_station_diagram`` and joins the interface with
 ``MotionPlanningInterface.add_to_builder`` themselves (see its docstring).
 """
 
@@ -10,7 +10,7 @@ import dataclasses as dc
 
 from pydrake.systems.framework import DiagramBuilder
 
-from diagrams.panda_station import make_panda_station_diagram
+from diagrams.arm_station import make_arm_station_diagram
 from diagrams.pickplace_scenario import PickPlaceScenario
 from planning.interface import MotionPlanningInterface
 from planning.io.scene_files import apply_scene_file
@@ -50,7 +50,7 @@ def make_planning_station(
     interface.state.set_q(station_config.initial_q)
     builder = DiagramBuilder()
     station = builder.AddSystem(
-        make_panda_station_diagram(station_config, meshcat=meshcat, mode=scenario.mode)
+        make_arm_station_diagram(station_config, meshcat=meshcat, mode=scenario.mode)
     )
     station.set_name("station")
     interface.add_to_builder(builder, station)

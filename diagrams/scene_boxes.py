@@ -2,7 +2,7 @@
 
 ``add_scene_box`` adds a box of a scene file (``planning.io.scene_files.BoxSpec``) welded to the
 world or as a free body; ``box_pose`` is its pose and ``contact_properties`` its friction and
-stiffness. Builder helpers of ``diagrams.panda_station`` (nothing here is a system).
+stiffness. Builder helpers of ``diagrams.arm_station`` (nothing here is a system).
 """
 
 import numpy as np

@@ -1,4 +1,5 @@
-"""``python -m drake_sim.pickplace``: the Panda picks the object and places it beyond the obstacle.
+"""``python -m drake_sim.pickplace``: the Panda (or the scenario's arm: ``--scenario
+config/pickplace_ur5.yaml``) picks the object and places it beyond the obstacle.
 
 With a viewer (the default) the station runs in real time in Meshcat: open the page, press
 "Pick" (or pass ``--no-wait``), watch, and press Ctrl-C to quit. Ctrl-C or SIGTERM stop a run at

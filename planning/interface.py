@@ -1,10 +1,13 @@
 """MotionPlanningInterface: RobotState, PlanningScene and MotionPlanner for a user's own code,
-joined to a running Panda diagram (MoveIt's ``move_group`` interface, with no ROS).
+joined to a running arm station (MoveIt's ``move_group`` interface, with no ROS).
 
 One object holds one ``PlanningScene``, one ``RobotState`` and one ``MotionPlanner`` that share
-them. Joined to a diagram that has a Panda with the station's ports (``panda.position_command``
-in, ``panda.state`` out; ``diagrams.panda_station``), it drives the arm and the fingers and keeps
-the ``RobotState`` at the latest measured joints. Long actions either block (``execute``,
+them. Joined to a diagram that has the scene's robot with the station's ports
+(``<robot>.position_command`` in, ``<robot>.state`` out, the group's joints then the fingers:
+``panda.*`` for the Panda; ``diagrams.arm_station``), it drives the arm and the fingers and keeps
+the ``RobotState`` at the latest measured joints. An arm without finger joints has a virtual
+gripper (0 closed, 1 open): in a kinematic station, closing it near the object holds the object
+at the tool until it opens again. Long actions either block (``execute``,
 ``move_gripper``, ``move_to_pose`` ...) or return a handle (``execute_async``,
 ``move_gripper_async``, ``plan_async``) with ``done()``, ``result()``, ``cancel()`` and
 ``progress``. The simulation runs in simulated time: it advances while you wait on a handle's
@@ -44,9 +47,13 @@ from planning.execution.handles import (
 )
 from planning.execution.options import InterfaceOptions
 from planning.execution.station_link import StationLink
-from planning.model.layout import FINGER_CLOSED, FINGER_OPEN, FINGER_Q
+from planning.model.planning_model import touch_links
 from planning.motion_planner import MotionPlanner, MotionPlannerOptions
 from planning.robot_state import RobotState
+
+VIRTUAL_GRASP = 0.02
+"""m: a virtual gripper (an arm without fingers) holds the object when the object is within this
+of the gripper: the attach link or a link below it (the UR5's fixed Robotiq pads)."""
 
 
 class MotionPlanningInterface(StationLink):
@@ -150,7 +157,7 @@ class MotionPlanningInterface(StationLink):
             plan,
             self.scene,
             self.state.q,
-            x[FINGER_Q],
+            x[self.layout.finger_q],
             self.planner.options.timing,
             start_tolerance=self.options.start_tolerance,
             resolution=self.planner.options.validation.resolution,
@@ -200,32 +207,39 @@ class MotionPlanningInterface(StationLink):
 
     # -------------------------------------------------------------------------- gripper ----
     def move_gripper_async(self, position: float) -> ActionHandle:
-        """Moves each finger to ``position`` (m, 0 closed .. 0.04 open) at ``finger_speed``.
+        """Moves each finger to ``position`` (``layout.finger_closed`` .. ``finger_open``: the
+        Panda's m, 0 closed .. 0.04 open) at ``finger_speed``; a virtual gripper (an arm without
+        fingers, 0 closed .. 1 open) moves in one ``poll_period``.
 
         Closing on an object stops there (physics: the fingers squeeze it with their force
-        limit; kinematic: they stop at its faces and the object follows the hand until the
-        gripper opens again). A gripper move still running is superseded: it finishes at once,
-        cancelled (PREEMPTED, "superseded by ...").
+        limit; kinematic: they stop at its faces, or a virtual gripper where it is when the
+        object is at the tool, and the object follows the hand until the gripper opens again).
+        A gripper move still running is superseded: it finishes at once, cancelled (PREEMPTED,
+        "superseded by ...").
 
         Raises:
             ValueError: ``position`` is NaN or infinite, or ``options.finger_speed`` is not a
                 finite number > 0 (the command is refused, a running move goes on).
-            PlanningError: INVALID_GOAL, ``position`` is outside [0, 0.04] m.
+            PlanningError: INVALID_GOAL, ``position`` is outside the gripper's range.
         """
         self._check_open()
         if not math.isfinite(position):
             raise ValueError(f"position must be a finite number of metres, not {position!r}")
-        if not FINGER_CLOSED <= position <= FINGER_OPEN:
+        closed, open_ = self.layout.finger_closed, self.layout.finger_open
+        if not closed <= position <= open_:
             raise PlanningError(
                 ErrorCode.INVALID_GOAL,
-                f"finger position {position} m is outside [{FINGER_CLOSED}, {FINGER_OPEN}]",
+                f"finger position {position} is outside [{closed:g}, {open_:g}]",
             )
         context, t = self._context(self._commander), self.time
         start = float(self._commander.gripper(context).sample(t))
         target, opening = position, position > start
         if self._follower is not None and not opening:
             target = max(target, self._kinematic_contact(self._context(self._follower), start))
-        command = GripperCommand(start, target, t, self.options.finger_speed)  # checks the speed
+        speed = self.options.finger_speed
+        if not self.layout.num_fingers:  # a virtual gripper: open or closed at the next poll
+            speed = (open_ - closed) / self.options.poll_period
+        command = GripperCommand(start, target, t, speed)  # checks the speed
         if self._gripper is not None and not self._gripper.done():
             reason = f"superseded by a gripper move to {position} m"
             self._end(self._gripper, ErrorCode.PREEMPTED, reason, cancelled=True)
@@ -239,17 +253,26 @@ class MotionPlanningInterface(StationLink):
         return self.move_gripper_async(position).result()
 
     def open_gripper(self) -> ExecutionResult:
-        return self.move_gripper(FINGER_OPEN)
+        return self.move_gripper(self.layout.finger_open)
 
     def close_gripper(self) -> ExecutionResult:
-        return self.move_gripper(0.0)
+        return self.move_gripper(self.layout.finger_closed)
 
     def _kinematic_contact(self, follower_context, opening: float) -> float:
-        """Kinematic mode: the finger position at which closing meets the object (0 if the
-        object is not between the fingers)."""
+        """Kinematic mode: the finger position at which closing meets the object (closed if the
+        object is not between the fingers); a virtual gripper stops half-way when the object is
+        within ``VIRTUAL_GRASP`` of the gripper."""
+        closed = self.layout.finger_closed
         obj = self.scene.world_objects.get("object") or self.scene.attached_objects.get("object")
         if obj is None:
-            return 0.0
+            return closed
+        if not self.layout.num_fingers:
+            if "object" not in self.scene.world_objects:
+                return closed
+            robot = self.scene.model.robot
+            links = [robot.attach_link, *touch_links(robot)]
+            gap = self.scene.distance_to_links("object", links, self.state.q, 2 * VIRTUAL_GRASP)
+            return 0.5 * (closed + self.layout.finger_open) if gap <= VIRTUAL_GRASP else closed
         X_WT = self.state.fk()  # the TCP, between the fingertips; y is the closing axis
         X_TO = X_WT.inverse() @ self._follower.pose(follower_context)
         half = 0.5 * np.abs(X_TO.rotation().matrix()) @ np.asarray(obj.size, dtype=float)
@@ -257,5 +280,5 @@ class MotionPlanningInterface(StationLink):
         # Between the fingers: within the pads' reach along x and z, inside the opening along y.
         outside = abs(p[0]) > half[0] + 0.01 or abs(p[2]) > half[2] + 0.02
         if outside or abs(p[1]) + half[1] > opening:
-            return 0.0
+            return closed
         return float(half[1] + abs(p[1]))

@@ -263,6 +263,18 @@ class PlanningScene(ScenePositions):
                 pairs.add(tuple(sorted((name_a, name_b))))
         return sorted(pairs)
 
+    def distance_to_links(self, name: str, links, q, reach: float) -> float:
+        """The smallest signed distance (m) from object ``name`` to the robot links ``links``
+        at q, or ``reach`` when none is closer than that."""
+        self._checker.UpdateContextPositions(self._context, self.full_q(q))
+        query_object, links = self._context.GetQueryObject(), set(links)
+        best = reach
+        for pair in query_object.ComputeSignedDistancePairwiseClosestPoints(reach):
+            names = {self._describe(query_object, i)[0] for i in (pair.id_A, pair.id_B)}
+            if name in names and names & links:
+                best = min(best, pair.distance)
+        return float(best)
+
     def describe_collisions(self, q) -> str:
         """Returns "a <-> b, c <-> d" for the colliding pairs at q ("" when there are none)."""
         return ", ".join(f"{a} <-> {b}" for a, b in self.colliding_pairs(q))

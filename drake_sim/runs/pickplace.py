@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from diagrams.panda_station import MODES, PandaStationConfig
+from diagrams.arm_station import MODES, ArmStationConfig
 from diagrams.pickplace_scenario import (
     PickPlaceScenario,
     check_scenario,
@@ -195,7 +195,7 @@ def load(path, overrides, *, scene=None, station=None) -> PickPlaceScenario:
     overrides and ``station`` (a file of the station section) applied, checked."""
     scenario = load_pickplace_scenario(path, scene_file=scene, overrides=overrides)
     if station is not None:
-        loaded = load_typed(PandaStationConfig, filename=station, defaults=scenario.station)
+        loaded = load_typed(ArmStationConfig, filename=station, defaults=scenario.station)
         for key in ("model", "scene", "initial_q"):
             if getattr(loaded, key) != getattr(scenario.station, key):
                 raise ConfigError(f"{station}: 'station.{key}' is set by the scenario")

@@ -31,9 +31,9 @@ import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from diagrams.arm_station import make_arm_station_diagram
 from diagrams.flip import make_flip_diagram
 from diagrams.flip_scenario import load_flip_scenario
-from diagrams.panda_station import make_panda_station_diagram
 from diagrams.pickplace_scenario import load_pickplace_scenario
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
@@ -140,7 +140,7 @@ def flip_diagram_graphviz(max_depth: int = 1) -> str:
 
 def panda_station_graphviz(max_depth: int = 1) -> str:
     """Graphviz source of the Panda station in physics mode (the shipped scenario)."""
-    diagram = make_panda_station_diagram(load_pickplace_scenario().station_config(), mode="physics")
+    diagram = make_arm_station_diagram(load_pickplace_scenario().station_config(), mode="physics")
     return diagram.GetGraphvizString(max_depth=max_depth)
 
 

@@ -1,5 +1,5 @@
-"""The systems a ``MotionPlanningInterface`` adds to a diagram: the command source of the Panda
-and, in kinematic mode, the held object's pose.
+"""The systems a ``MotionPlanningInterface`` adds to a diagram: the command source of the arm
+and its fingers and, in kinematic mode, the held object's pose.
 
 Both keep what they are doing in abstract Drake state. The interface changes that state between
 ``Simulator.AdvanceTo`` calls (a new plan, a gripper move, a stop), like a ROS action server
@@ -27,8 +27,8 @@ class ArmCommand:
     leaves the collision-checked path and comes to rest on it.
 
     Attributes:
-        q_hold: 7 arm joints held when there is no plan, rad.
-        plan: a ``Plan`` (its ``sample(t)`` gives the 7 arm joints) or None.
+        q_hold: the group's joints held when there is no plan, rad or m.
+        plan: a ``Plan`` (its ``sample(t)`` gives the group's joints) or None.
         t0: simulated time at which the plan starts, s.
         stop_at: simulated time a stop began, s, or None.
         stop_duration: s, time to come to rest from ``stop_at``.
@@ -60,7 +60,7 @@ class ArmCommand:
         return self.t0 + self.plan.duration
 
     def sample(self, t: float) -> np.ndarray:
-        """The 7 commanded arm joints at simulated time t, rad."""
+        """The group's commanded joints at simulated time t, rad or m."""
         if self.plan is None:
             return self.q_hold
         return self.plan.sample(self.plan_time(t))[0]
@@ -84,7 +84,7 @@ class GripperCommand:
     """Each finger moves from ``start`` to ``target`` at ``speed``, starting at ``t0``.
 
     Attributes:
-        start: finger position at t0, m (0 closed, 0.04 open).
+        start: finger position at t0, m (the Panda's: 0 closed, 0.04 open).
         target: finger position commanded at the end, m.
         t0: simulated time the move starts, s.
         speed: m/s per finger.
@@ -111,33 +111,42 @@ class GripperCommand:
         return self.start + np.sign(self.target - self.start) * travel
 
 
-class PandaCommander(LeafSystem):
-    """The Panda's position command: the arm from an ``ArmCommand``, the fingers from a
-    ``GripperCommand``, both held in abstract state.
+class ArmCommander(LeafSystem):
+    """A station's position command: the group's joints from an ``ArmCommand``, the fingers from
+    a ``GripperCommand``, both held in abstract state.
 
     .. pydrake_system::
 
-        name: PandaCommander
+        name: ArmCommander
         output_ports:
         - position_command
 
-    ``position_command`` has 9 values: 7 arm joints (rad) then both fingers (m).
+    ``position_command`` has the group's joints then one value per finger, each the gripper's
+    position (``planning.model.arm_layout``: the Panda's 7 arm joints, rad, and 2 fingers, m).
+    Without fingers the gripper command is still kept (a virtual gripper) and not sent.
+
+    Args:
+        q_arm: the group's joints to hold at first.
+        finger: the gripper's position at first.
+        num_fingers: the finger joints the command carries.
     """
 
-    def __init__(self, *, q_arm: np.ndarray, finger: float):
+    def __init__(self, *, q_arm: np.ndarray, finger: float, num_fingers: int):
         super().__init__()
-        arm = ArmCommand(q_hold=np.asarray(q_arm, dtype=float).copy())
-        self._arm = self.DeclareAbstractState(Value[object](arm))
+        q_arm = np.asarray(q_arm, dtype=float).copy()
+        self._n, self._fingers = q_arm.size, int(num_fingers)
+        self._arm = self.DeclareAbstractState(Value[object](ArmCommand(q_hold=q_arm)))
         self._gripper = self.DeclareAbstractState(Value[object](GripperCommand(finger, finger)))
-        self.DeclareVectorOutputPort("position_command", 9, self.CalcCommand)
+        size = self._n + self._fingers
+        self.DeclareVectorOutputPort("position_command", size, self.CalcCommand)
 
     def CalcCommand(self, context, output) -> None:
         t = context.get_time()
         arm = context.get_abstract_state(self._arm).get_value()
         finger = context.get_abstract_state(self._gripper).get_value().sample(t)
-        values = np.empty(9)
-        values[:7] = arm.sample(t)
-        values[7:] = finger
+        values = np.empty(self._n + self._fingers)
+        values[: self._n] = arm.sample(t)
+        values[self._n :] = finger
         output.SetFromVector(values)
 
     def arm(self, context) -> ArmCommand:
@@ -170,38 +179,42 @@ class ObjectFollower(LeafSystem):
 
         name: ObjectFollower
         input_ports:
-        - panda_state
+        - robot_state
         output_ports:
         - object_positions
 
-    ``panda_state`` is the Panda's 18-value state (9 positions first); ``object_positions`` the
-    object's 7 free-body positions [qw, qx, qy, qz, x, y, z].
+    ``robot_state`` is a station's state (its positions first: the group's joints, then the
+    fingers); ``object_positions`` the object's 7 free-body positions [qw, qx, qy, qz, x, y, z].
 
     Args:
-        plant: a plant holding the Panda (e.g. the planning scene's), used for the hand's pose.
+        plant: a plant holding the robot (e.g. the planning scene's), used for the hand's pose.
         body: its attachment body A.
         X_WO: the object's initial pose.
+        indices: where the station's positions sit in ``plant``'s positions.
+        q_rest: ``plant``'s positions for the joints the station does not carry.
     """
 
-    def __init__(self, *, plant, body, X_WO: RigidTransform):
+    def __init__(self, *, plant, body, X_WO: RigidTransform, indices, q_rest):
         super().__init__()
         self._plant, self._body = plant, body
         self._plant_context = plant.CreateDefaultContext()  # a cache for forward kinematics
-        self._instance = body.model_instance()
+        self._indices = np.asarray(indices, dtype=int)
+        self._q = np.array(q_rest, dtype=float)
         self._grip = self.DeclareAbstractState(Value[object](Grip(X_WO)))
-        self._state = self.DeclareVectorInputPort("panda_state", 18)
+        self._state = self.DeclareVectorInputPort("robot_state", 2 * self._indices.size)
         self.DeclareVectorOutputPort("object_positions", 7, self.CalcPositions)
 
-    def X_WA(self, q: np.ndarray) -> RigidTransform:
-        """The attachment frame's pose at the Panda's 9 positions q."""
-        self._plant.SetPositions(self._plant_context, self._instance, q)
+    def X_WA(self, x: np.ndarray) -> RigidTransform:
+        """The attachment frame's pose at the station's state (or positions) x."""
+        self._q[self._indices] = x[: self._indices.size]
+        self._plant.SetPositions(self._plant_context, self._q)
         return self._plant.EvalBodyPoseInWorld(self._plant_context, self._body)
 
     def pose(self, context) -> RigidTransform:
         grip = context.get_abstract_state(self._grip).get_value()
         if grip.X_AO is None:
             return grip.X_WO
-        return self.X_WA(self._state.Eval(context)[:9]) @ grip.X_AO
+        return self.X_WA(self._state.Eval(context)) @ grip.X_AO
 
     def CalcPositions(self, context, output) -> None:
         output.SetFromVector(free_body_positions(self.pose(context)))
@@ -209,7 +222,7 @@ class ObjectFollower(LeafSystem):
     def grab(self, context) -> None:
         """The hand carries the object from now on, keeping its current pose relative to A."""
         X_WO = self.pose(context)
-        X_AO = self.X_WA(self._state.Eval(context)[:9]).inverse() @ X_WO
+        X_AO = self.X_WA(self._state.Eval(context)).inverse() @ X_WO
         context.get_mutable_abstract_state(self._grip).set_value(Grip(X_WO, X_AO))
 
     def release(self, context) -> None:

@@ -1,4 +1,4 @@
-"""The station side of ``MotionPlanningInterface``: it joins a Panda station diagram, runs it
+"""The station side of ``MotionPlanningInterface``: it joins an arm station diagram, runs it
 in simulated time, and judges, stops, times out and closes the arm and gripper actions.
 
 Running actions are checked, and monitors called, at every multiple of ``poll_period`` of
@@ -17,7 +17,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 
 from planning.errors import ErrorCode
-from planning.execution.commander import GripperCommand, ObjectFollower, PandaCommander
+from planning.execution.commander import ArmCommander, GripperCommand, ObjectFollower
 from planning.execution.handles import (
     MAX_WAIT,
     TIME_TOL,
@@ -26,12 +26,15 @@ from planning.execution.handles import (
     check_duration,
 )
 from planning.execution.options import InterfaceOptions
-from planning.model.layout import ARM_V, FINGER_Q, FINGER_V, NUM_POSITIONS
-from planning.model.panda import ATTACHMENT_BODY
+from planning.model.arm_layout import ArmLayout
 
 
 class StationLink:
-    """Joins a Panda station and runs it; ``MotionPlanningInterface`` adds the planning.
+    """Joins an arm station and runs it; ``MotionPlanningInterface`` adds the planning.
+
+    The station's ports are named after the scene's robot and carry its group's joints then its
+    fingers (``layout``, ``planning.model.arm_layout``): ``panda.position_command`` and
+    ``panda.state`` for the Panda.
 
     Subclasses set ``planner`` (its timing limits brake a cancelled arm). Closed (``close``, or
     leaving a ``with`` block), every call raises ``RuntimeError("the interface is closed")``: a
@@ -49,7 +52,10 @@ class StationLink:
 
     def __init__(self, scene, state, options: InterfaceOptions):
         self.scene, self.state, self.options = scene, state, options
-        self._commander: PandaCommander | None = None
+        self.layout = ArmLayout.of(scene.model.robot)
+        model = scene.model
+        self._rows = self.layout.plant_indices(model.plant, model.instance)
+        self._commander: ArmCommander | None = None
         self._follower: ObjectFollower | None = None
         self._station = None
         self._simulator: Simulator | None = None
@@ -68,29 +74,39 @@ class StationLink:
 
         Args:
             builder: the builder that holds ``station``.
-            station: a system with ``panda.position_command`` (input) and ``panda.state``
-                (output); optionally ``object.position_command`` (kinematic) and
-                ``object.pose``.
+            station: a system with ``<robot>.position_command`` (input) and ``<robot>.state``
+                (output), ``<robot>`` the robot's name (``layout.robot``); optionally
+                ``object.position_command`` (kinematic) and ``object.pose``.
         """
         self._check_open()
         self._station = station
+        layout = self.layout
+        finger = self.scene.finger_positions
         commander = builder.AddSystem(
-            PandaCommander(q_arm=self.state.q, finger=float(self.scene.finger_positions[0]))
+            ArmCommander(
+                q_arm=self.state.q,
+                finger=float(finger[0]) if finger.size else layout.finger_open,
+                num_fingers=layout.num_fingers,
+            )
         )
-        commander.set_name("panda_commander")
-        builder.Connect(commander.get_output_port(), station.GetInputPort("panda.position_command"))
+        commander.set_name("arm_commander")
+        command = station.GetInputPort(layout.port("position_command"))
+        builder.Connect(commander.get_output_port(), command)
         self._commander = commander
         if station.HasInputPort("object.position_command") and "object" in self.scene.world_objects:
-            plant = self.scene.plant
+            model = self.scene.model
             follower = builder.AddSystem(
                 ObjectFollower(
-                    plant=plant,
-                    body=plant.GetBodyByName(ATTACHMENT_BODY),
+                    plant=model.plant,
+                    body=model.plant.GetBodyByName(model.attachment_body, model.instance),
                     X_WO=self.scene.object_pose("object"),
+                    indices=self._rows,
+                    q_rest=self.state.q_full,
                 )
             )
             follower.set_name("object_follower")
-            builder.Connect(station.GetOutputPort("panda.state"), follower.get_input_port())
+            state = station.GetOutputPort(layout.port("state"))
+            builder.Connect(state, follower.get_input_port())
             builder.Connect(
                 follower.get_output_port(), station.GetInputPort("object.position_command")
             )
@@ -164,11 +180,21 @@ class StationLink:
         return system.GetMyMutableContextFromRoot(self.simulator.get_mutable_context())
 
     def read_state(self) -> np.ndarray:
-        """Reads the Panda's 18 measured values (9 positions, 9 velocities), updates
-        ``state`` and returns them."""
-        x = self._station.GetOutputPort("panda.state").Eval(self._context(self._station))
-        self.state.set_q(x[:NUM_POSITIONS])
-        return np.array(x)
+        """Reads the station's measured state (``layout``: the group's joints and the fingers,
+        then their velocities; the Panda's 18 values), updates ``state`` and returns it."""
+        port = self._station.GetOutputPort(self.layout.port("state"))
+        x = np.array(port.Eval(self._context(self._station)))
+        q = self.state.q_full
+        q[self._rows] = x[: self.layout.num_positions]
+        self.state.set_q(q)
+        return x
+
+    def _finger(self, x: np.ndarray) -> float:
+        """The gripper's measured position: the fingers' mean, or the virtual gripper's command
+        (an arm without fingers)."""
+        if self.layout.num_fingers:
+            return float(np.mean(x[self.layout.finger_q]))
+        return float(self._commander.gripper(self._context(self._commander)).sample(self.time))
 
     def object_pose(self):
         """X_WO of the simulated object (the station's ``object.pose``), or None."""
@@ -228,7 +254,7 @@ class StationLink:
     def _check_arm(self, x: np.ndarray) -> None:
         opts, handle = self.options, self._arm
         command = self._commander.arm(self._context(self._commander))
-        speed = float(np.max(np.abs(x[ARM_V])))
+        speed = float(np.max(np.abs(x[self.layout.arm_v])))
         if not self._settled(command.end_time(), speed, opts.settle_velocity, opts.settle_timeout):
             return
         if command.stop_at is not None:
@@ -251,7 +277,7 @@ class StationLink:
     def _end(self, handle: ActionHandle, code, message: str, *, cancelled=False, grasped=False):
         """Finishes ``handle`` now at the measured joints and fingers: a success when ``code``
         is None, status CANCELLED when ``cancelled``."""
-        finger = float(np.mean(self.read_state()[FINGER_Q]))
+        finger = self._finger(self.read_state())
         t = self.time
         result = ExecutionResult(
             code is None, code, message, self.state.q, finger, handle.start_time, t, grasped
@@ -261,20 +287,24 @@ class StationLink:
     def _check_gripper(self, x: np.ndarray) -> None:
         opts, handle = self.options, self._gripper
         command = self._commander.gripper(self._context(self._commander))
-        speed, at_rest = float(np.max(np.abs(x[FINGER_V]))), opts.finger_settle_velocity
+        speed = float(np.max(np.abs(x[self.layout.finger_v]), initial=0.0))
+        at_rest = opts.finger_settle_velocity
         if not self._settled(command.end_time(), speed, at_rest, opts.finger_settle_timeout):
             return
         if handle.cancel_requested:
             self._end(handle, ErrorCode.PREEMPTED, "cancelled", cancelled=True)
             return
-        finger, requested = float(np.mean(x[FINGER_Q])), handle.target
+        finger, requested = self._finger(x), handle.target
         closing = command.target < command.start or requested < command.start
         grasped = closing and finger > requested + opts.finger_tolerance
         if grasped and self._follower is not None:
             self._follower.grab(self._context(self._follower))
         ok = grasped or abs(finger - requested) <= opts.finger_tolerance
         what = "holding an object" if grasped else "reached"
-        message = f"fingers at {finger * 1000:.1f} mm each ({what})"
+        if self.layout.num_fingers:
+            message = f"fingers at {finger * 1000:.1f} mm each ({what})"
+        else:
+            message = f"virtual gripper at {finger:.2f} ({what})"
         self._end(handle, None if ok else ErrorCode.CONTROL_FAILED, message, grasped=grasped)
 
     # --------------------------------------------------------------------------- cancel ----

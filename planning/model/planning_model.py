@@ -138,10 +138,7 @@ class PlanningModel:
     def home(self) -> np.ndarray:
         """The group's start when none is given: the named configuration "ready", else "home",
         else the first named one, else the middle of the joints' limits."""
-        for name in ("ready", "home", *self.named_configurations):
-            if name in self.named_configurations:
-                return self.named_configurations[name].copy()
-        return 0.5 * (self.robot.lower + self.robot.upper)
+        return _home(self.robot, self.named_configurations)
 
     def full_q(self, q, others) -> np.ndarray:
         """The plant's positions for a group q (``others`` over ``other_indices`` added) or for
@@ -220,7 +217,7 @@ def build_planning_model(config: RobotModelConfig, *, meshcat=None) -> PlanningM
     link = plant.GetFrameByName(robot.attach_link, instance)
     plant.WeldFrames(link, attachment.body_frame(), RigidTransform())
     plant.Finalize()
-    touch = _touch_links(robot)
+    touch = touch_links(robot)
     pairs = list(robot.disabled_pairs) + [(attachment_name, b) for b in touch]
     pairs += [(a, b) for a, b in config.extra_disabled_collisions]
     apply_disabled_collisions(plant, scene_graph, instance, pairs)
@@ -303,7 +300,7 @@ def finger_defaults(config: RobotModelConfig) -> list[float]:
     """The finger joints' start positions (the joints below the attach link, in the URDF's
     order): ``config.finger_position`` for each, else the description's default positions."""
     robot = robot_model(config)
-    below = set(_touch_links(robot))
+    below = set(touch_links(robot))
     names = [
         j.name
         for j in robot.tree.joints.values()
@@ -325,7 +322,19 @@ def finger_defaults(config: RobotModelConfig) -> list[float]:
     return [float(value)] * len(names)
 
 
-def _touch_links(robot: RobotModel) -> list[str]:
+def home_configuration(config: RobotModelConfig) -> np.ndarray:
+    """The group's start when none is given (``PlanningModel.home``), without a plant."""
+    return _home(robot_model(config), named_configurations(config))
+
+
+def _home(robot: RobotModel, named: dict) -> np.ndarray:
+    for name in ("ready", "home", *named):
+        if name in named:
+            return np.array(named[name], dtype=float)
+    return 0.5 * (robot.lower + robot.upper)
+
+
+def touch_links(robot: RobotModel) -> list[str]:
     """The links below the attach link (fingers), which held objects may touch."""
     below, stack = [], [robot.attach_link]
     while stack:

@@ -24,6 +24,11 @@ also picks the grasp: the first top-down yaw, nearest the hand's, for which all 
 The planner models the fingers open (the planning scene keeps ``finger_positions`` at the open
 hand); the check before each motion (``planning.execution.gate``) uses the measured fingers,
 which touch the object from ``close_gripper`` on: so it is attached before it is lifted.
+
+Poses are those of the grasp frame G (``PickPlaceOptions``: ``tool_xyz``, ``tool_rpy`` place it in
+the end-effector frame E); the planner is asked for the E that puts G there. An arm without
+finger joints (the UR5 of VAMP's set, its Robotiq fingers fixed open) closes a virtual gripper,
+which in a kinematic station holds the object where it is (``MotionPlanningInterface``).
 """
 
 from __future__ import annotations
@@ -33,10 +38,9 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RollPitchYaw
 
 from planning.errors import PlanningError
-from planning.model.layout import FINGER_OPEN
 from planning.scene_objects import SceneObject
 from planning.task.geometry import boxes_overlap, rotation_distance, top_down_grasps
 from planning.task.options import PickPlaceOptions
@@ -124,6 +128,8 @@ class PickPlaceTask:
         self._scene = interface.scene
         self.options = options or PickPlaceOptions()
         self._on_step = on_step
+        opts = self.options
+        self._X_EG = RigidTransform(RollPitchYaw(opts.tool_rpy), np.asarray(opts.tool_xyz, float))
         self._grasp: RigidTransform | None = None  # X_OG of the chosen top-down grasp
         self._scene_object: SceneObject | None = None  # the object as the scene had it
 
@@ -150,7 +156,7 @@ class PickPlaceTask:
         grasps = top_down_grasps(X_WO, obj.size, opts.max_object_width)
         if not grasps:
             return f"the object is wider than the hand can hold ({opts.max_object_width} m)"
-        hand = self._mpi.state.hand_pose().rotation()
+        hand = self._tcp().rotation()
         grasps.sort(key=lambda X: rotation_distance(hand, X.rotation()))
         why = ""
         for X_WG in grasps:
@@ -175,14 +181,22 @@ class PickPlaceTask:
             ("the place target", X_WP, opts.preplace_height),
         ):
             try:
-                q = self._mpi.state.ik(self._up(X_low, height)).q
+                q = self._mpi.state.ik(self._ee(self._up(X_low, height))).q
             except PlanningError as e:
                 return None, f"no collision-free IK above {what} (out of reach?): {e.message}"
-            line = self._mpi.planner.plan_cartesian(X_low, q_start=q)
+            line = self._mpi.planner.plan_cartesian(self._ee(X_low), q_start=q)
             if not line.success:
                 return None, f"no straight way down to {what}: {line.message}"
             q_high.append(q)
         return q_high, ""
+
+    def _tcp(self) -> RigidTransform:
+        """X_WG of the grasp frame now."""
+        return self._mpi.state.hand_pose() @ self._X_EG
+
+    def _ee(self, X_WG: RigidTransform) -> RigidTransform:
+        """X_WE of the end-effector frame that puts the grasp frame at X_WG."""
+        return X_WG @ self._X_EG.inverse()
 
     @staticmethod
     def _up(X: RigidTransform, height: float) -> RigidTransform:
@@ -237,7 +251,7 @@ class PickPlaceTask:
         else:
             steps = [
                 self._move_above_object,
-                lambda: self._gripper(FINGER_OPEN),
+                lambda: self._gripper(self._mpi.layout.finger_open),
                 self._approach,
                 self._close,
                 self._lift,
@@ -312,7 +326,8 @@ class PickPlaceTask:
         return outcome.message
 
     def _approach(self) -> str:
-        return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, self._X_WG))
+        target = self._ee(self._X_WG)
+        return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, target))
 
     def _close(self) -> str:
         outcome = self._mpi.close_gripper()
@@ -321,7 +336,7 @@ class PickPlaceTask:
         return outcome.message
 
     def _cartesian_up(self, height: float) -> str:
-        target = self._up(self._mpi.state.hand_pose(), height)
+        target = self._up(self._mpi.state.hand_pose(), height)  # E rises as G does
         return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, target))
 
     def _lift(self) -> str:
@@ -343,7 +358,7 @@ class PickPlaceTask:
         scene.remove_object(OBJECT)
         X_AO = scene.attachment_pose(q).inverse() @ X_WO
         scene.attach_new(SceneObject(OBJECT, "box", tuple(self._scene_object.size), X_AO))
-        self._X_OG = X_WO.inverse() @ self._mpi.state.hand_pose()
+        self._X_OG = X_WO.inverse() @ self._tcp()
 
     def _move_to_place(self) -> str:
         X_WO_place = self._place_pose(self._object_pose())
@@ -351,14 +366,14 @@ class PickPlaceTask:
         above = self._up(X_WG, self.options.preplace_height)
         t0 = time.perf_counter()
         try:  # the arm configuration checked before the task, corrected for the real grasp
-            q_above = self._mpi.state.ik(above, q_seed=self._q_preplace).q
+            q_above = self._mpi.state.ik(self._ee(above), q_seed=self._q_preplace).q
         finally:
             self._planning += time.perf_counter() - t0
         self._execute(self._plan_timed(self._mpi.planner.plan_to_joints, q_above))
-        return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, X_WG))
+        return self._execute(self._plan_timed(self._mpi.planner.plan_cartesian, self._ee(X_WG)))
 
     def _release(self) -> str:
-        self._gripper(FINGER_OPEN)
+        self._gripper(self._mpi.layout.finger_open)
         scene = self._scene
         scene.detach(OBJECT, self._mpi.state.q)
         # The released object may still touch the open hand (it can tip against a finger as it

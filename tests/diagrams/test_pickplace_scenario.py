@@ -1,11 +1,13 @@
 """The pick-and-place scenario: one file, one place per value, overrides and the scene file."""
 
+import numpy as np
 import pytest
 
 import diagrams.pickplace_scenario as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from planning.model.layout import FINGER_OPEN, NUM_POSITIONS, READY_Q
+from planning.model.planning_model import named_configurations
 from tests.robot_helpers import XARM7_YAML
 
 SCENE = config_dir() / "pickplace.yaml"
@@ -53,11 +55,22 @@ def test_bad_scenarios_name_the_key(tmp_path, text, match):
         mut.load_pickplace_scenario(write(tmp_path, text))
 
 
-def test_another_arm_is_refused_by_name_until_stations_take_it(tmp_path):
+def test_an_arm_without_fingers_grasps_in_the_kinematic_mode_only(tmp_path):
     arm = tmp_path / "xarm7.yaml"
     arm.write_text(XARM7_YAML)
-    with pytest.raises(ConfigError, match="is UF_ROBOT; the pick-and-place stations simulate"):
-        mut.load_pickplace_scenario(overrides=[f"robot.model.description={arm}"])
+    sets = [f"robot.model.description={arm}", "initial_configuration=home"]
+    with pytest.raises(ConfigError, match="UF_ROBOT has no finger joints.*kinematic mode only"):
+        mut.load_pickplace_scenario(overrides=sets)
+    dut = mut.load_pickplace_scenario(overrides=[*sets, "mode=kinematic"])
+    config = dut.station_config()
+    assert len(config.initial_q) == 7  # the xArm's 7 joints, no fingers
+    home = named_configurations(dut.robot.model)["home"]
+    np.testing.assert_array_equal(config.initial_q, home)
+
+
+def test_physics_gains_take_the_size_of_the_group(tmp_path):
+    with pytest.raises(ConfigError, match="station.arm_kd needs 7 values, one per joint"):
+        mut.load_pickplace_scenario(overrides=["station.arm_kd=[1, 2, 3]"])
 
 
 def test_scene_file_is_relative_to_the_scenario(tmp_path):

@@ -12,7 +12,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from diagrams.pickplace_scenario import load_pickplace_scenario
 from diagrams.planning_station import make_planning_station
 from planning import ErrorCode, PlanningError
-from planning.interface import FINGER_OPEN
+from planning.model.layout import FINGER_OPEN
 
 R_DOWN = RotationMatrix.MakeXRotation(np.pi)  # the hand's z axis pointing down
 X_TARGET = RigidTransform(R_DOWN, [0.45, -0.25, 0.25])  # above the object

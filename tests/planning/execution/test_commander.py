@@ -1,5 +1,5 @@
 """ArmCommand and GripperCommand (what the arm and fingers follow in simulated time), and the
-PandaCommander and ObjectFollower LeafSystems, each in a small diagram or context of its own."""
+ArmCommander and ObjectFollower LeafSystems, each in a small diagram or context of its own."""
 
 import numpy as np
 import pytest
@@ -100,13 +100,13 @@ def test_gripper_moves_at_its_speed_between_start_and_target(start, target):
     assert hold.end_time() == 3.0 and hold.sample(10.0) == 0.02
 
 
-# -------------------------------------------------------------------------- PandaCommander ----
+# -------------------------------------------------------------------------- ArmCommander ----
 @pytest.fixture
 def commander():
-    """A PandaCommander alone in a diagram, simulated from t = 0."""
+    """An ArmCommander alone in a diagram, simulated from t = 0."""
     builder = DiagramBuilder()
     q_arm = READY.copy()
-    dut = builder.AddSystem(mut.PandaCommander(q_arm=q_arm, finger=0.04))
+    dut = builder.AddSystem(mut.ArmCommander(q_arm=q_arm, finger=0.04, num_fingers=2))
     q_arm[0] = 1.0  # the commander keeps its own copy
     simulator = Simulator(builder.Build())
     simulator.Initialize()
@@ -146,7 +146,7 @@ def test_commander_plays_the_commands_set_in_its_state(commander, plan):
 
 def test_commander_output_is_a_function_of_state_and_time(plan):
     """Two contexts with the same state and time give the same command."""
-    dut = mut.PandaCommander(q_arm=READY, finger=0.04)
+    dut = mut.ArmCommander(q_arm=READY, finger=0.04, num_fingers=2)
     contexts = [dut.CreateDefaultContext() for _ in range(2)]
     for context in contexts:
         dut.set_arm(context, mut.ArmCommand(q_hold=EXTENDED, plan=plan, t0=0.0))
@@ -174,8 +174,14 @@ def follower_pose(dut, context) -> RigidTransform:
 def test_follower_carries_the_object_between_grab_and_release(scene):
     plant = scene.plant
     X_WO = RigidTransform(RollPitchYaw(0.0, 0.0, 0.4), [0.31, 0.0, 0.38])
-    dut = mut.ObjectFollower(plant=plant, body=plant.GetBodyByName(ATTACHMENT_BODY), X_WO=X_WO)
-    assert dut.get_input_port().get_name() == "panda_state" and dut.get_input_port().size() == 18
+    dut = mut.ObjectFollower(
+        plant=plant,
+        body=plant.GetBodyByName(ATTACHMENT_BODY),
+        X_WO=X_WO,
+        indices=np.arange(9),
+        q_rest=scene.full_q(READY),
+    )
+    assert dut.get_input_port().get_name() == "robot_state" and dut.get_input_port().size() == 18
     assert dut.get_output_port().get_name() == "object_positions"
     context = dut.CreateDefaultContext()
     arm_at = lambda q: dut.get_input_port().FixValue(context, panda_state(scene, q))  # noqa: E731
@@ -203,6 +209,8 @@ def test_follower_carries_the_object_between_grab_and_release(scene):
 def test_follower_attachment_pose_matches_the_scene(scene):
     plant = scene.plant
     body = plant.GetBodyByName(ATTACHMENT_BODY)
-    dut = mut.ObjectFollower(plant=plant, body=body, X_WO=RigidTransform())
+    dut = mut.ObjectFollower(
+        plant=plant, body=body, X_WO=RigidTransform(), indices=np.arange(9), q_rest=np.zeros(9)
+    )
     for q in (READY, EXTENDED):
         assert dut.X_WA(scene.full_q(q)).IsNearlyEqualTo(scene.attachment_pose(q), 1e-12)

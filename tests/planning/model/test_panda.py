@@ -1,4 +1,4 @@
-"""The stations' Panda: converted assets, SRDF filters, the planning configuration's checks."""
+"""The Panda: converted assets, SRDF filters, the planning configuration's checks."""
 
 import numpy as np
 import pytest
@@ -7,9 +7,8 @@ from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
 from planning import config as config_mod
 from planning.model import assets as panda_assets
-from planning.model import panda as mut
 from planning.model.model_config import RobotModelConfig
-from planning.model.planning_model import apply_disabled_collisions
+from planning.model.planning_model import apply_disabled_collisions, robot_model
 
 
 def test_urdf_is_cached_with_relative_converted_meshes():
@@ -64,7 +63,7 @@ def test_bad_disabled_pair_names_the_body():
     from pydrake.planning import RobotDiagramBuilder
 
     builder = RobotDiagramBuilder(time_step=0.0)
-    instance = mut.add_panda(builder.plant(), RobotModelConfig())
+    instance = robot_model(RobotModelConfig()).add_to(builder.plant())
     builder.plant().Finalize()
     with pytest.raises(ConfigError, match="panda_link9"):
         apply_disabled_collisions(
@@ -88,10 +87,11 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
     violations = {}
     for apply in (False, True):
         builder = RobotDiagramBuilder(time_step=0.0)
-        instance = mut.add_panda(builder.plant(), config.model)
+        robot = robot_model(config.model)
+        instance = robot.add_to(builder.plant())
         builder.plant().Finalize()
         if apply:
-            pairs = mut.disabled_collision_pairs(config.model)
+            pairs = robot.disabled_pairs
             apply_disabled_collisions(builder.plant(), builder.scene_graph(), instance, pairs)
         diagram = builder.Build()
         context = diagram.CreateDefaultContext()
@@ -103,24 +103,3 @@ def test_plant_distance_constraints_honour_the_srdf_filters():
         v == scene.is_collision_free(q) for v, q in zip(violations[True], qs, strict=True)
     )
     assert disagree <= 2
-
-
-def test_add_table_has_its_top_at_zero():
-    from pydrake.geometry import Role
-    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
-    from pydrake.systems.framework import DiagramBuilder
-
-    from planning.config import PlanningConfig
-    from planning.model.panda import add_table
-
-    table = PlanningConfig().table
-    builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
-    add_table(plant, table)
-    plant.Finalize()
-    inspector = scene_graph.model_inspector()
-    frame = plant.GetBodyFrameIdOrThrow(plant.world_body().index())
-    for role in (Role.kProximity, Role.kIllustration):
-        (geometry,) = inspector.GetGeometries(frame, role)
-        z_top = inspector.GetPoseInFrame(geometry).translation()[2] + table.size[2] / 2
-        assert abs(z_top) < 1e-12

@@ -1,4 +1,5 @@
-"""PickPlaceTask on the Panda station in both modes, in simulated time."""
+"""PickPlaceTask on the Panda station in both modes, and on arms without fingers, in simulated
+time."""
 
 import dataclasses as dc
 
@@ -7,10 +8,14 @@ import pytest
 
 import planning.task.pick_place as mut
 from diagrams.pickplace_scenario import load_pickplace_scenario
+from diagrams.planning_station import make_planning_station
+from drake_sim.base.resources import config_dir
 from planning import StepReport, TaskReport
+from planning.errors import PlanningError
 from planning.io.scene_files import BoxSpec
 from planning.task.geometry import boxes_overlap
 from tests.pickplace_helpers import random_scene, run_task
+from tests.robot_helpers import XARM7_YAML, vamp_robot
 
 STEPS = list(mut.STEPS)
 
@@ -106,3 +111,58 @@ def test_random_scenes_physics(config):
 def test_options_defaults():
     dut = mut.PickPlaceOptions()
     assert dut.max_object_width < 0.08 and dut.place_tolerance == 0.02
+
+
+def test_an_arm_without_fingers_picks_with_a_virtual_gripper(tmp_path):
+    """The xArm 7 of example-robot-data (no gripper) in the kinematic station: its grasp frame
+    5 mm beyond the flange, on the object's top; closing holds the object at the tool."""
+    arm = tmp_path / "xarm7.yaml"
+    arm.write_text(XARM7_YAML)
+    config = load_pickplace_scenario(
+        overrides=[
+            f"robot.model.description={arm}",
+            "initial_configuration=home",
+            "mode=kinematic",
+            "task.grasp_depth=0.0",
+            "task.tool_xyz=[0.0, 0.0, 0.005]",
+        ]
+    )
+    watch = ObstacleWatch(config)
+    report, interface = run_task(config, "kinematic", monitor=watch)
+    assert report.success, report.reason
+    assert [s.name for s in report.steps] == STEPS
+    close = report.steps[STEPS.index("close_gripper")]
+    assert "virtual gripper at 0.50 (holding an object)" in close.message
+    assert report.place_error_m <= 0.02 and watch.overlaps == 0
+    # Released on the table: the object's bottom place_clearance above the top (z = 0).
+    z = report.object_final_position[2]
+    assert z == pytest.approx(
+        0.5 * config.scene.object.size[2] + config.task.place_clearance, abs=1e-3
+    )
+    assert interface.layout.num_fingers == 0
+
+
+def test_a_virtual_gripper_closes_on_nothing_away_from_the_object(tmp_path):
+    arm = tmp_path / "xarm7.yaml"
+    arm.write_text(XARM7_YAML)
+    sets = [f"robot.model.description={arm}", "initial_configuration=home", "mode=kinematic"]
+    interface = make_planning_station(load_pickplace_scenario(overrides=sets))
+    result = interface.close_gripper()
+    assert result.success and not result.grasped and result.finger_position == 0.0
+    with pytest.raises(PlanningError, match=r"outside \[0, 1\]"):
+        interface.move_gripper(1.5)
+    assert interface.open_gripper().finger_position == 1.0
+
+
+@pytest.mark.slow
+def test_the_ur5_scenario_picks_and_places():
+    """``config/pickplace_ur5.yaml``: VAMP's UR5 (fixed Robotiq fingers) on its pedestal, in the
+    kinematic station (slow: its description, meshes cut into pieces and clearance tables are
+    made on first use)."""
+    vamp_robot("ur5")
+    config = load_pickplace_scenario(config_dir() / "pickplace_ur5.yaml")
+    watch = ObstacleWatch(config)
+    report, interface = run_task(config, "kinematic", monitor=watch)
+    assert report.success, report.reason
+    assert report.place_error_m <= 0.02 and watch.overlaps == 0
+    assert interface.layout.robot == "ur5_robotiq85" and interface.layout.num_joints == 6

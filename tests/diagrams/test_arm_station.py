@@ -1,4 +1,7 @@
-"""Tests of the Panda station diagram in both modes, in simulated time."""
+"""Tests of the arm station diagram in both modes, in simulated time: the Panda, and arms from a
+description YAML (the xArm 7 of example-robot-data, a two-joint arm with a finger)."""
+
+import dataclasses as dc
 
 import numpy as np
 import pytest
@@ -10,12 +13,14 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
-import diagrams.panda_station as mut
+import diagrams.arm_station as mut
 from diagrams.pickplace_scenario import load_pickplace_scenario
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
-from planning.model.planning_model import build_planning_model
+from planning.model.model_config import RobotModelConfig
+from planning.model.planning_model import build_planning_model, named_configurations
 from planning.scene_objects import free_body_pose, free_body_positions
+from tests.robot_helpers import XARM7_YAML, make_elbow_robot
 
 SCENE = config_dir() / "pickplace.yaml"
 
@@ -51,7 +56,7 @@ def _ik(model, p_WG, q_seed):
 
 @pytest.mark.parametrize("mode", mut.MODES)
 def test_builds_with_documented_ports(config, mode):
-    dut = mut.make_panda_station_diagram(config, mode=mode)
+    dut = mut.make_arm_station_diagram(config, mode=mode)
     for name in ("panda.position_command",):
         assert dut.HasInputPort(name)
     for name in ("panda.state", "object.pose", "query_object"):
@@ -66,10 +71,10 @@ def test_builds_with_documented_ports(config, mode):
 
 def test_bad_mode_and_values(config):
     with pytest.raises(ConfigError):
-        mut.make_panda_station_diagram(config, mode="hardware")
-    bad = mut.PandaStationConfig(initial_q=[0.0] * 7, scene=config.scene)
+        mut.make_arm_station_diagram(config, mode="hardware")
+    bad = mut.ArmStationConfig(initial_q=[0.0] * 7, scene=config.scene)
     with pytest.raises(ConfigError):
-        mut.make_panda_station_diagram(bad)
+        mut.make_arm_station_diagram(bad)
 
 
 def test_unknown_station_key_rejected(tmp_path):
@@ -86,7 +91,7 @@ def test_free_body_positions_round_trip():
 
 
 def test_physics_holds_ready_under_gravity(config):
-    dut = mut.make_panda_station_diagram(config, mode="physics")
+    dut = mut.make_arm_station_diagram(config, mode="physics")
     context = dut.CreateDefaultContext()
     q_ready = np.asarray(config.initial_q)
     dut.GetInputPort("panda.position_command").FixValue(context, q_ready)
@@ -96,7 +101,7 @@ def test_physics_holds_ready_under_gravity(config):
 
 
 def test_kinematic_plant_positions_equal_command(config, model):
-    dut = mut.make_panda_station_diagram(config, mode="kinematic")
+    dut = mut.make_arm_station_diagram(config, mode="kinematic")
     context = dut.CreateDefaultContext()
     q = np.array([0.3, 0.6, -0.2, -0.9, 0.1, 1.5, 0.7, 0.02, 0.03])
     X_WO = RigidTransform(RollPitchYaw(0.0, 0.0, 0.5), [0.3, 0.2, 0.3])
@@ -136,7 +141,7 @@ def test_physics_grasp_lift_and_hold(config, model):
     trajectory = PiecewisePolynomial.FirstOrderHold(times, np.array(knots).T)
 
     builder = DiagramBuilder()
-    dut = builder.AddSystem(mut.make_panda_station_diagram(config, mode="physics"))
+    dut = builder.AddSystem(mut.make_arm_station_diagram(config, mode="physics"))
     source = builder.AddSystem(TrajectorySource(trajectory))
     builder.Connect(source.get_output_port(), dut.GetInputPort("panda.position_command"))
     diagram = builder.Build()
@@ -160,7 +165,7 @@ def test_draws_in_meshcat(config, mode):
     from pydrake.geometry import Meshcat
 
     meshcat = Meshcat()
-    dut = mut.make_panda_station_diagram(config, meshcat=meshcat, mode=mode)
+    dut = mut.make_arm_station_diagram(config, meshcat=meshcat, mode=mode)
     context = dut.CreateDefaultContext()
     dut.GetInputPort("panda.position_command").FixValue(context, np.asarray(config.initial_q))
     if mode == "kinematic":
@@ -168,3 +173,60 @@ def test_draws_in_meshcat(config, mode):
         dut.GetInputPort("object.position_command").FixValue(context, q_object)
     Simulator(dut, context).AdvanceTo(0.01)
     assert meshcat.HasPath("/drake")
+
+
+@pytest.fixture(scope="module")
+def xarm_config(config, tmp_path_factory):
+    """The station of the Panda's scene with the xArm 7 (no finger joints) at its home."""
+    arm = tmp_path_factory.mktemp("xarm") / "xarm7.yaml"
+    arm.write_text(XARM7_YAML)
+    model = RobotModelConfig(description=str(arm))
+    return mut.ArmStationConfig(model=model, scene=config.scene)
+
+
+def test_another_arm_has_ports_named_after_it_and_sized_by_its_group(xarm_config):
+    layout = mut.station_layout(xarm_config)
+    assert (layout.robot, layout.num_joints, layout.num_fingers) == ("UF_ROBOT", 7, 0)
+    dut = mut.make_arm_station_diagram(xarm_config, mode="kinematic")
+    assert dut.GetInputPort("UF_ROBOT.position_command").size() == 7
+    assert dut.GetOutputPort("UF_ROBOT.state").size() == 14
+    assert not dut.HasInputPort("panda.position_command")
+    # Its start is the model's home (no initial_q given).
+    home = named_configurations(xarm_config.model)["home"]
+    np.testing.assert_array_equal(mut.initial_positions(xarm_config), home)
+    context = dut.CreateDefaultContext()
+    q = home + 0.1
+    dut.GetInputPort("UF_ROBOT.position_command").FixValue(context, q)
+    dut.GetInputPort("object.position_command").FixValue(
+        context, mut.default_object_positions(xarm_config)
+    )
+    Simulator(dut, context).AdvanceTo(0.05)
+    np.testing.assert_allclose(dut.GetOutputPort("UF_ROBOT.state").Eval(context)[:7], q)
+
+
+def test_another_arm_holds_its_pose_in_physics(xarm_config):
+    """The xArm's 7 joints take the station's 7 default gains; gravity compensation holds it."""
+    dut = mut.make_arm_station_diagram(xarm_config, mode="physics")
+    context = dut.CreateDefaultContext()
+    home = mut.initial_positions(xarm_config)
+    dut.GetInputPort("UF_ROBOT.position_command").FixValue(context, home)
+    Simulator(dut, context).AdvanceTo(0.5)
+    q = dut.GetOutputPort("UF_ROBOT.state").Eval(context)[:7]
+    assert np.max(np.abs(q - home)) < 2e-3
+
+
+def test_physics_refuses_gains_of_another_size_and_unheld_joints(xarm_config, tmp_path):
+    short = dc.replace(xarm_config, arm_kp=[100.0] * 6)
+    with pytest.raises(ConfigError, match=r"station.arm_kp needs 7 values.*joint1"):
+        mut.make_arm_station_diagram(short, mode="physics")
+    mut.make_arm_station_diagram(short, mode="kinematic")  # gains are not used there
+    # The elbow arm's block slides on the arm, not below its attach link (the tool): a joint
+    # outside the group and the fingers, held at its default in the kinematic station only.
+    description = make_elbow_robot(tmp_path, 1.0, finger=True)
+    scene = dc.replace(xarm_config.scene, object=None, obstacle=None)
+    elbow = mut.ArmStationConfig(model=RobotModelConfig(description=str(description)), scene=scene)
+    assert mut.station_layout(elbow).others == ("slide",)
+    with pytest.raises(ConfigError, match=r"elbow has moving joints .*\(slide\).*kinematic"):
+        mut.make_arm_station_diagram(elbow, mode="physics")
+    dut = mut.make_arm_station_diagram(elbow, mode="kinematic")
+    assert dut.GetInputPort("elbow.position_command").size() == 2

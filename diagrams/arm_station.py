@@ -1,20 +1,29 @@
-"""The Panda station: the Panda with its hand, the table, the object and the obstacle, in two modes.
+"""The arm station: a robot of any description, the table, the object and the obstacle, in two
+modes.
 
-``physics`` (the real robot's role): a discrete MultibodyPlant (SAP) with contact. Every Panda
-joint has a JointActuator with Drake's implicit PD controller (gains and effort limits from the
-config), which SAP solves together with contact, so stiff gains stay stable at a 1 ms step. The
-desired state comes from the position command through a ``StateInterpolatorWithDiscreteDerivative``
-(commanded velocities are the command's finite difference); the feed-forward actuation is gravity
-compensation (``InverseDynamics`` in gravity-compensation mode on the same plant, mapped to the
-Panda's actuators by Bᵀ). Actuator effort limits clamp PD plus feed-forward, so the fingers are
-position-controlled with a force limit, like the Franka hand, and hold the object by friction.
+The robot is the one the ``model`` names (``RobotModelConfig``: the Panda by default, or any
+description, ``planning.model.description``), welded at the world origin, with a massless
+``<robot>_attachment`` body on its attach link as the planner has. Its ports carry the planning
+group's joints and then its fingers (``planning.model.arm_layout``: the Panda's 7 + 2, the
+UR5's 6 + 0), named after the robot (``panda.position_command``, ``ur5_robotiq85.state``).
 
-``kinematic`` (Franka's fake hardware): nothing is simulated. ``MultibodyPositionToGeometryPose``
-writes the commanded positions (and the object's commanded pose) into its own context of the
-plant and sends the geometry poses to the SceneGraph; ``panda.state`` is the command and its
-finite-difference velocity.
+``physics`` (the real robot's role): a discrete MultibodyPlant (SAP) with contact. Every group
+and finger joint has a JointActuator with Drake's implicit PD controller (gains and effort limits
+from the config: one per group joint, and one for all fingers), which SAP solves together with
+contact, so stiff gains stay stable at a 1 ms step. The desired state comes from the position
+command through a ``StateInterpolatorWithDiscreteDerivative`` (commanded velocities are the
+command's finite difference); the feed-forward actuation is gravity compensation
+(``InverseDynamics`` in gravity-compensation mode on the same plant, mapped to the actuators by
+Bᵀ). Actuator effort limits clamp PD plus feed-forward, so the fingers are position-controlled
+with a force limit, like the Franka hand, and hold the object by friction. A robot with moving
+joints outside its group and fingers (a head) has no physics station (nothing would hold them).
 
-Settings are a ``PandaStationConfig``, the ``station`` section of the pick-and-place scenario
+``kinematic`` (MoveIt's fake hardware): nothing is simulated. ``MultibodyPositionToGeometryPose``
+writes the commanded positions (the other joints at their defaults, and the object's commanded
+pose) into its own context of the plant and sends the geometry poses to the SceneGraph;
+``<robot>.state`` is the command and its finite-difference velocity.
+
+Settings are an ``ArmStationConfig``, the ``station`` section of the pick-and-place scenario
 (``diagrams.pickplace_scenario``), which also fills in its robot model, scene and start.
 """
 
@@ -22,16 +31,18 @@ import dataclasses as dc
 
 import numpy as np
 from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Rgba, SceneGraph
+from pydrake.math import RigidTransform
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
     CoulombFriction,
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains
+from pydrake.multibody.tree import PdControllerGains, SpatialInertia
 from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (
+    ConstantVectorSource,
     MatrixGain,
     Multiplexer,
     StateInterpolatorWithDiscreteDerivative,
@@ -42,25 +53,18 @@ from diagrams.scene_boxes import add_scene_box, box_pose
 from drake_sim.base.errors import ConfigError
 from planning.execution.free_body_pose import FreeBodyPose
 from planning.io.scene_files import SceneFile
-from planning.model.layout import (
-    FINGER_OPEN,
-    NUM_ARM_JOINTS,
-    NUM_FINGERS,
-    NUM_POSITIONS,
-    READY_Q,
-)
+from planning.model.arm_layout import ArmLayout
 from planning.model.model_config import RobotModelConfig
-from planning.model.panda import (
-    ARM_JOINTS,
-    FINGER_JOINTS,
-    add_panda,
-    disabled_collision_pairs,
+from planning.model.planning_model import (
+    apply_disabled_collisions,
+    attachment_body_name,
+    finger_defaults,
+    home_configuration,
+    robot_model,
+    touch_links,
 )
-from planning.model.planning_model import apply_disabled_collisions
 from planning.scene_objects import FREE_BODY_POSITIONS, free_body_positions
 
-PANDA = "panda"
-"""The Panda's model instance name; its ports are ``panda.<signal>``."""
 OBJECT = "object"
 """The object's model instance and body name; its ports are ``object.<signal>``."""
 MODES = ("physics", "kinematic")
@@ -76,12 +80,13 @@ def _default_plant() -> MultibodyPlantConfig:
 
 
 @dc.dataclass
-class PandaStationConfig:
+class ArmStationConfig:
     """Everything the station needs: plant, gains, friction, viewer, and (filled in by the
     scenario) the robot model, the scene and the start.
 
     Gains are Drake implicit PD gains per joint actuator; effort limits clamp PD plus gravity
-    compensation. Arm values are per joint 1..7; finger values are per finger.
+    compensation. Arm values are one per joint of the group (the defaults are the Panda's 7,
+    Franka's datasheet); finger values are per finger. The kinematic station uses none of them.
     """
 
     plant: MultibodyPlantConfig = dc.field(default_factory=_default_plant)
@@ -101,11 +106,10 @@ class PandaStationConfig:
     # Point-contact stiffness of the fingers, the object, the table and the obstacle, N/m
     # (pairs combine in series); the plant's default lets 70 N sink a finger ~9 mm in.
     point_stiffness: float = 1.0e6
-    # Initial Panda positions: the arm joints (rad) then the fingers (m). In a pick-and-place
+    # Initial positions: the group's joints (rad or m) then the fingers (m); empty for the
+    # model's home configuration with the fingers at their defaults. In a pick-and-place
     # scenario: its initial_configuration, fingers at robot.model.finger_position.
-    initial_q: list[float] = dc.field(
-        default_factory=lambda: [*READY_Q, *[FINGER_OPEN] * NUM_FINGERS]
-    )
+    initial_q: list[float] = dc.field(default_factory=list)
     visualization: VisualizationConfig = dc.field(
         default_factory=lambda: VisualizationConfig(
             publish_contacts=False, publish_proximity=False, publish_inertia=False
@@ -116,13 +120,47 @@ class PandaStationConfig:
     scene: SceneFile = dc.field(default_factory=SceneFile)
 
 
-def validate_station_config(config: PandaStationConfig) -> None:
-    """Raises ConfigError for values the builder cannot use."""
-    if len(config.initial_q) != NUM_POSITIONS:
-        raise ConfigError(f"initial_q has {len(config.initial_q)} values, expected {NUM_POSITIONS}")
-    for name in ("arm_kp", "arm_kd", "arm_effort_limits"):
-        if len(getattr(config, name)) != NUM_ARM_JOINTS:
-            raise ConfigError(f"station.{name} needs {NUM_ARM_JOINTS} values (joints 1..7)")
+def station_layout(config: ArmStationConfig) -> ArmLayout:
+    """The positions the station's ports carry (``planning.model.arm_layout``).
+
+    Raises:
+        ConfigError: the robot description cannot be loaded.
+    """
+    return ArmLayout.of(robot_model(config.model))
+
+
+def initial_positions(config: ArmStationConfig) -> np.ndarray:
+    """The station's start: ``initial_q``, or the model's home with the default fingers."""
+    if config.initial_q:
+        return np.asarray(config.initial_q, dtype=float)
+    home = home_configuration(config.model)
+    return np.concatenate([home, finger_defaults(config.model)])
+
+
+def validate_station_config(config: ArmStationConfig, mode: str = "kinematic") -> None:
+    """Raises ConfigError for values the builder cannot use in ``mode`` (the gains only count
+    in physics)."""
+    layout = station_layout(config)
+    n = layout.num_positions
+    if config.initial_q and len(config.initial_q) != n:
+        raise ConfigError(
+            f"initial_q has {len(config.initial_q)} values, expected {n} "
+            f"({layout.num_joints} joints of the group, {layout.num_fingers} fingers)"
+        )
+    if mode == "physics":
+        if layout.others:
+            raise ConfigError(
+                f"physics station: {layout.robot} has moving joints outside its group and "
+                f"fingers ({', '.join(layout.others)}), which nothing would hold: use the "
+                "kinematic mode"
+            )
+        for name in ("arm_kp", "arm_kd", "arm_effort_limits"):
+            if len(getattr(config, name)) != layout.num_joints:
+                raise ConfigError(
+                    f"station.{name} needs {layout.num_joints} values, one per joint of "
+                    f"{layout.robot}'s group ({', '.join(layout.group)}); it has "
+                    f"{len(getattr(config, name))}"
+                )
     scene = config.scene
     for name in ("table", "object", "obstacle"):
         box = getattr(scene, name)
@@ -138,30 +176,34 @@ def _friction(pair: list[float]) -> CoulombFriction:
     return CoulombFriction(pair[0], pair[1])
 
 
-def _add_actuators(plant: MultibodyPlant, instance, config: PandaStationConfig) -> None:
-    """One PD-controlled JointActuator per Panda joint, arm then fingers."""
+def _add_actuators(plant: MultibodyPlant, instance, layout: ArmLayout, config) -> None:
+    """One PD-controlled JointActuator per group joint, then per finger."""
     gains = list(zip(config.arm_kp, config.arm_kd, config.arm_effort_limits, strict=True))
-    gains += [(config.finger_kp, config.finger_kd, config.finger_force_limit)] * 2
-    for name, (kp, kd, limit) in zip((*ARM_JOINTS, *FINGER_JOINTS), gains, strict=True):
+    gains += [(config.finger_kp, config.finger_kd, config.finger_force_limit)] * layout.num_fingers
+    for name, (kp, kd, limit) in zip(layout.joint_names, gains, strict=True):
         joint = plant.GetJointByName(name, instance)
         actuator = plant.AddJointActuator(name, joint, limit)
         actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
 
 
-def _add_world(plant: MultibodyPlant, config: PandaStationConfig, *, physics: bool):
-    """Adds the Panda, the table, the obstacle and the object; finalizes; sets defaults.
+def _add_world(plant: MultibodyPlant, config: ArmStationConfig, layout, *, physics: bool):
+    """Adds the robot, the table, the obstacle and the object; finalizes; sets defaults.
 
     Returns:
-        (panda instance, object body or None).
+        (robot instance, object body or None).
     """
     scene = config.scene
-    model = dc.replace(config.model, extra_disabled_collisions=[])
-    panda = add_panda(plant, model)
+    robot = robot_model(config.model)
+    instance = robot.add_to(plant)
+    attachment = plant.AddRigidBody(
+        attachment_body_name(robot.name), instance, SpatialInertia.Zero()
+    )
+    link = plant.GetFrameByName(robot.attach_link, instance)
+    plant.WeldFrames(link, attachment.body_frame(), RigidTransform())
     if physics:
-        _add_actuators(plant, panda, config)
+        _add_actuators(plant, instance, layout, config)
     stiff = {"point_stiffness": config.point_stiffness}
     if scene.table is not None:
-        # planning.model.panda.add_table passes an Rgba where Drake wants an array (a bug).
         color = Rgba(0.55, 0.4, 0.25, 1.0)
         friction = _friction(config.table_friction)
         add_scene_box(
@@ -183,19 +225,29 @@ def _add_world(plant: MultibodyPlant, config: PandaStationConfig, *, physics: bo
             plant, OBJECT, scene.object, friction=_friction(mu), color=color, free=True, **stiff
         )
     plant.Finalize()
-    plant.SetDefaultPositions(panda, np.asarray(config.initial_q, dtype=float))
-    return panda, body
+    q = plant.GetDefaultPositions(instance)
+    q[layout.plant_indices(plant, instance)] = initial_positions(config)
+    q[layout.plant_indices(plant, instance, layout.others)] = layout.other_positions
+    plant.SetDefaultPositions(instance, q)
+    return instance, body
 
 
-def _set_finger_friction(plant: MultibodyPlant, scene_graph: SceneGraph, instance, config) -> None:
-    """Gives the fingers' collision geometry the configured friction and stiffness (the URDF
-    sets neither)."""
+def _disabled_pairs(config: ArmStationConfig) -> list[tuple[str, str]]:
+    """The SRDF's disabled pairs, and held objects against the touch links (the fingers)."""
+    robot = robot_model(config.model)
+    attachment = attachment_body_name(robot.name)
+    return list(robot.disabled_pairs) + [(attachment, b) for b in touch_links(robot)]
+
+
+def _set_finger_friction(plant, scene_graph: SceneGraph, instance, layout, config) -> None:
+    """Gives the fingers' collision geometry the configured friction and stiffness (URDFs set
+    neither)."""
     from pydrake.geometry import ProximityProperties, RoleAssign
 
     inspector = scene_graph.model_inspector()
     friction = _friction(config.finger_friction)
-    for name in ("panda_leftfinger", "panda_rightfinger"):
-        body = plant.GetBodyByName(name, instance)
+    for name in layout.fingers:
+        body = plant.GetJointByName(name, instance).child_body()
         for geometry in plant.GetCollisionGeometriesForBody(body):
             props = ProximityProperties(inspector.GetProximityProperties(geometry))
             if props.HasProperty("material", "coulomb_friction"):
@@ -210,16 +262,17 @@ def _set_finger_friction(plant: MultibodyPlant, scene_graph: SceneGraph, instanc
             scene_graph.AssignRole(plant.get_source_id(), geometry, props, RoleAssign.kReplace)
 
 
-def make_panda_station_diagram(
-    config: PandaStationConfig, *, meshcat=None, mode: str = "physics"
+def make_arm_station_diagram(
+    config: ArmStationConfig, *, meshcat=None, mode: str = "physics"
 ) -> Diagram:
-    """Builds the Panda station.
+    """Builds the arm station.
 
-    Exported ports (both modes):
-        panda.position_command (input): 9 positions, the 7 arm joints (rad) then the 2 fingers
-            (m each, 0 closed, 0.04 open).
-        panda.state (output): 18 values, the Panda's 9 positions then 9 velocities (rad, m,
-            rad/s, m/s); physics: the plant's; kinematic: the command and its finite difference.
+    Exported ports (both modes), ``<robot>`` the robot's name (``station_layout(config).robot``,
+    the Panda's "panda"):
+        <robot>.position_command (input): the group's joints (rad or m) then the fingers (m
+            each; the Panda's: 0 closed, 0.04 open).
+        <robot>.state (output): those positions then their velocities; physics: the plant's;
+            kinematic: the command and its finite difference.
         object.pose (output, when the scene has an object): X_WO, an abstract RigidTransform of
             the object's centre frame O in the world frame W.
         query_object (output): the SceneGraph's QueryObject.
@@ -239,36 +292,37 @@ def make_panda_station_diagram(
         mode: "physics" or "kinematic".
 
     Raises:
-        ConfigError: an unknown mode or bad config values.
+        ConfigError: an unknown mode, bad config values, or a robot the mode cannot simulate.
     """
     if mode not in MODES:
         raise ConfigError(f"mode {mode!r} is not one of {MODES}")
-    validate_station_config(config)
+    validate_station_config(config, mode)
+    layout = station_layout(config)
     if mode == "physics":
-        diagram = _make_physics(config, meshcat)
+        diagram = _make_physics(config, layout, meshcat)
     else:
-        diagram = _make_kinematic(config, meshcat)
-    diagram.set_name(f"panda_station_{mode}")
+        diagram = _make_kinematic(config, layout, meshcat)
+    diagram.set_name(f"{layout.robot}_station_{mode}")
     return diagram
 
 
-def _make_physics(config: PandaStationConfig, meshcat) -> Diagram:
+def _make_physics(config: ArmStationConfig, layout: ArmLayout, meshcat) -> Diagram:
     if config.plant.time_step <= 0.0:
         raise ConfigError("physics mode needs a discrete plant: plant.time_step > 0")
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(config.plant, builder)
-    panda, body = _add_world(plant, config, physics=True)
-    apply_disabled_collisions(plant, scene_graph, panda, disabled_collision_pairs(config.model))
-    _set_finger_friction(plant, scene_graph, panda, config)
+    robot, body = _add_world(plant, config, layout, physics=True)
+    apply_disabled_collisions(plant, scene_graph, robot, _disabled_pairs(config))
+    _set_finger_friction(plant, scene_graph, robot, layout, config)
 
     interpolator = builder.AddSystem(
         StateInterpolatorWithDiscreteDerivative(
-            NUM_POSITIONS, config.plant.time_step, suppress_initial_transient=True
+            layout.num_positions, config.plant.time_step, suppress_initial_transient=True
         )
     )
     interpolator.set_name("command_interpolator")
-    builder.ExportInput(interpolator.get_input_port(), f"{PANDA}.position_command")
-    builder.Connect(interpolator.get_output_port(), plant.get_desired_state_input_port(panda))
+    builder.ExportInput(interpolator.get_input_port(), layout.port("position_command"))
+    builder.Connect(interpolator.get_output_port(), plant.get_desired_state_input_port(robot))
 
     gravity = builder.AddSystem(InverseDynamics(plant, InverseDynamics.kGravityCompensation))
     gravity.set_name("gravity_compensation")
@@ -276,9 +330,18 @@ def _make_physics(config: PandaStationConfig, meshcat) -> Diagram:
     to_actuation.set_name("generalized_force_to_actuation")
     builder.Connect(plant.get_state_output_port(), gravity.get_input_port_estimated_state())
     builder.Connect(gravity.get_output_port_generalized_force(), to_actuation.get_input_port())
-    builder.Connect(to_actuation.get_output_port(), plant.get_actuation_input_port(panda))
+    builder.Connect(to_actuation.get_output_port(), plant.get_actuation_input_port(robot))
 
-    builder.ExportOutput(plant.get_state_output_port(panda), f"{PANDA}.state")
+    # The robot's state in the layout's order, whatever order the plant keeps its joints in.
+    joints = [plant.GetJointByName(name, robot) for name in layout.joint_names]
+    rows = [j.position_start() for j in joints]
+    rows += [plant.num_positions() + j.velocity_start() for j in joints]
+    select = np.zeros((len(rows), plant.num_multibody_states()))
+    select[np.arange(len(rows)), rows] = 1.0
+    to_state = builder.AddSystem(MatrixGain(select))
+    to_state.set_name("robot_state")
+    builder.Connect(plant.get_state_output_port(), to_state.get_input_port())
+    builder.ExportOutput(to_state.get_output_port(), layout.port("state"))
     if body is not None:
         pose = builder.AddSystem(FreeBodyPose(input_size=13))
         pose.set_name("object_pose")
@@ -293,7 +356,7 @@ def _make_physics(config: PandaStationConfig, meshcat) -> Diagram:
     return builder.Build()
 
 
-def _make_kinematic(config: PandaStationConfig, meshcat) -> Diagram:
+def _make_kinematic(config: ArmStationConfig, layout: ArmLayout, meshcat) -> Diagram:
     from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
     builder = DiagramBuilder()
@@ -302,15 +365,15 @@ def _make_kinematic(config: PandaStationConfig, meshcat) -> Diagram:
     plant = MultibodyPlant(0.0)
     plant.set_name("plant")
     plant.RegisterAsSourceForSceneGraph(scene_graph)
-    panda, body = _add_world(plant, config, physics=False)
-    apply_disabled_collisions(plant, scene_graph, panda, disabled_collision_pairs(config.model))
+    robot, body = _add_world(plant, config, layout, physics=False)
+    apply_disabled_collisions(plant, scene_graph, robot, _disabled_pairs(config))
 
-    # The plant's q from [panda q (9); object q (7)], whatever order the plant keeps them in.
-    columns = [
-        plant.GetJointByName(n, panda).position_start() for n in (*ARM_JOINTS, *FINGER_JOINTS)
-    ]
+    # The plant's q from [command; other joints; object q (7)], whatever order the plant keeps.
+    columns = list(layout.plant_indices(plant, robot))
+    columns += list(layout.plant_indices(plant, robot, layout.others))
     if body is not None:
-        columns += list(range(body.floating_positions_start(), body.floating_positions_start() + 7))
+        start = body.floating_positions_start()
+        columns += list(range(start, start + FREE_BODY_POSITIONS))
     if len(columns) != plant.num_positions():
         raise ConfigError(f"kinematic station: expected {len(columns)} plant positions")
     P = np.zeros((plant.num_positions(), len(columns)))
@@ -324,24 +387,32 @@ def _make_kinematic(config: PandaStationConfig, meshcat) -> Diagram:
         to_pose.get_output_port(), scene_graph.get_source_pose_port(plant.get_source_id())
     )
 
-    sizes = [NUM_POSITIONS] + ([FREE_BODY_POSITIONS] if body is not None else [])
+    sizes = [layout.num_positions]
+    if layout.others:
+        sizes.append(len(layout.others))
+    if body is not None:
+        sizes.append(FREE_BODY_POSITIONS)
     mux = builder.AddSystem(Multiplexer(sizes))
     builder.Connect(mux.get_output_port(), to_q.get_input_port())
+    if layout.others:
+        others = builder.AddSystem(ConstantVectorSource(np.asarray(layout.other_positions)))
+        others.set_name("other_joints")
+        builder.Connect(others.get_output_port(), mux.get_input_port(1))
     interpolator = builder.AddSystem(
         StateInterpolatorWithDiscreteDerivative(
-            NUM_POSITIONS, config.plant.time_step or 0.001, suppress_initial_transient=True
+            layout.num_positions, config.plant.time_step or 0.001, suppress_initial_transient=True
         )
     )
     interpolator.set_name("command_interpolator")
-    command = f"{PANDA}.position_command"
+    command = layout.port("position_command")
     builder.ExportInput(mux.get_input_port(0), command)
     builder.ConnectInput(command, interpolator.get_input_port())
-    builder.ExportOutput(interpolator.get_output_port(), f"{PANDA}.state")
+    builder.ExportOutput(interpolator.get_output_port(), layout.port("state"))
     if body is not None:
-        pose = builder.AddSystem(FreeBodyPose(input_size=7))
+        pose = builder.AddSystem(FreeBodyPose(input_size=FREE_BODY_POSITIONS))
         pose.set_name("object_pose")
         object_command = f"{OBJECT}.position_command"
-        builder.ExportInput(mux.get_input_port(1), object_command)
+        builder.ExportInput(mux.get_input_port(len(sizes) - 1), object_command)
         builder.ConnectInput(object_command, pose.get_input_port())
         builder.ExportOutput(pose.get_output_port(), f"{OBJECT}.pose")
     builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
@@ -351,7 +422,7 @@ def _make_kinematic(config: PandaStationConfig, meshcat) -> Diagram:
     return builder.Build()
 
 
-def default_object_positions(config: PandaStationConfig) -> np.ndarray:
+def default_object_positions(config: ArmStationConfig) -> np.ndarray:
     """The object's 7 positions at its scene pose (for ``object.position_command``)."""
     if config.scene.object is None:
         raise ConfigError("the scene has no object")
