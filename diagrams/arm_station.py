@@ -225,10 +225,10 @@ def _add_world(plant: MultibodyPlant, config: ArmStationConfig, layout, *, physi
             plant, OBJECT, scene.object, friction=_friction(mu), color=color, free=True, **stiff
         )
     plant.Finalize()
-    q = plant.GetDefaultPositions(instance)
+    q = plant.GetDefaultPositions()  # all of the plant's (the object's too), by joint
     q[layout.plant_indices(plant, instance)] = initial_positions(config)
     q[layout.plant_indices(plant, instance, layout.others)] = layout.other_positions
-    plant.SetDefaultPositions(instance, q)
+    plant.SetDefaultPositions(q)
     return instance, body
 
 
