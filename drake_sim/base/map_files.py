@@ -11,9 +11,13 @@ row = highest y) with free 254, occupied 0, unknown 205, and a YAML file with ``
 ``mode``, ``resolution``, ``origin``, ``negate``, ``occupied_thresh`` and ``free_thresh``.
 One deliberate difference: ``free_thresh`` defaults to ROS 1's 0.196, not nav2's 0.25, with
 which map_server loads the unknown grey (p = 50/255 = 0.196) as free (slam_toolbox issue #587).
-``load_map`` reads a map the way ``map_server`` does (``negate``, thresholds, modes ``trinary``,
-``scale`` and ``raw``; PGM P5 or P2, or any image Pillow reads). Floats are written with the
-shortest text that reads back exactly, so save -> load -> save gives identical bytes.
+``load_map`` reads a map the way nav2's ``map_server`` does (``negate``, thresholds, modes
+``trinary``, ``scale`` and ``raw``; PGM P5 or P2, or any image Pillow reads). In ``scale`` mode
+a value between the thresholds is ``rint(100 * ratio)`` of its place between them, as nav2
+rounds (``scale_rounding="ros1"``: ROS 1's ``int(99 * ratio)``), and a transparent pixel is
+unknown, as both do. Keys map_server does not read (``map_type``, ...) are ignored with one
+warning line naming them, as map_server ignores them. Floats are written with the shortest text
+that reads back exactly, so save -> load -> save gives identical bytes.
 
 Every problem with a map file is one ``MapFileError`` line naming the file and the problem.
 """
@@ -21,6 +25,7 @@ Every problem with a map file is one ``MapFileError`` line naming the file and t
 import contextlib
 import dataclasses as dc
 import json
+import logging
 import math
 import re
 from pathlib import Path
@@ -41,6 +46,8 @@ FREE_THRESH = 0.196
 _REQUIRED = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")
 _KEYS = (*_REQUIRED, "mode")
 _PLAIN = re.compile(r"[A-Za-z0-9_./+-]+")
+SCALE_ROUNDING = ("nav2", "ros1")
+_log = logging.getLogger(__name__)
 
 
 class MapFileError(ConfigError):
@@ -150,17 +157,22 @@ def save_map(
     return pgm, yml
 
 
-def load_map(yaml_path: Path | str) -> OccupancyMap:
+def load_map(yaml_path: Path | str, *, scale_rounding: str = "nav2") -> OccupancyMap:
     """Reads a map_server map (its ``.yaml`` and the image it names).
 
     Each pixel's occupancy is p = (255 - value) / 255 (value / 255 with ``negate``); in mode
     ``trinary``, p > occupied_thresh is occupied (100), p < free_thresh free (0), else unknown
-    (-1); ``scale`` gives the values in between linearly (1..99); ``raw`` takes the pixel value
-    as the cell value (values above 100 unknown). Colour images are averaged over R, G, B.
+    (-1); ``scale`` gives the values in between linearly (nav2: ``rint(100 * ratio)``; with
+    ``scale_rounding="ros1"``, ROS 1's ``int(99 * ratio)``) and transparent pixels unknown;
+    ``raw`` takes the pixel value as the cell value (values above 100 unknown). Colour images
+    are averaged over R, G, B. Keys map_server does not read are ignored (one warning line).
 
     Raises:
         MapFileError: one line naming the file and the problem.
+        ValueError: an unknown ``scale_rounding``.
     """
+    if scale_rounding not in SCALE_ROUNDING:
+        raise ValueError(f"scale_rounding must be one of {SCALE_ROUNDING}, not {scale_rounding!r}")
     yaml_path = Path(yaml_path)
     where = str(yaml_path)
     try:
@@ -171,9 +183,11 @@ def load_map(yaml_path: Path | str) -> OccupancyMap:
         raise MapFileError(str(e)) from None
     if not isinstance(tree, dict):
         raise MapFileError(f"{where}: expected a mapping of map_server keys")
-    unknown = [str(k) for k in tree if k not in _KEYS]
-    if unknown:
-        raise MapFileError(f"{where}: unknown key '{unknown[0]}' (known: {', '.join(_KEYS)})")
+    ignored = [str(k) for k in tree if k not in _KEYS]
+    if ignored:
+        _log.warning(
+            "%s: ignored keys %s (map_server does not read them)", where, ", ".join(ignored)
+        )
     missing = [k for k in _REQUIRED if k not in tree]
     if missing:
         raise MapFileError(f"{where}: missing key '{missing[0]}'")
@@ -200,7 +214,9 @@ def load_map(yaml_path: Path | str) -> OccupancyMap:
     if not image_path.is_absolute():
         image_path = yaml_path.parent / image_path
     pixels = read_image(image_path).astype(np.float64)
-    cells = _cells(pixels, bool(negate), occupied_thresh, free_thresh, mode)
+    cells = _cells(pixels, bool(negate), occupied_thresh, free_thresh, mode, scale_rounding)
+    if mode == "scale":
+        cells[~_opaque(image_path, pixels.shape)] = UNKNOWN
     return OccupancyMap(np.flipud(cells), resolution, origin)
 
 
@@ -288,19 +304,34 @@ def _read_other_image(path: Path) -> np.ndarray:
         raise MapFileError(f"{path}: cannot read map image ({e})") from None
 
 
-def _cells(pixels, negate, occupied_thresh, free_thresh, mode) -> np.ndarray:
+def _cells(pixels, negate, occupied_thresh, free_thresh, mode, rounding="nav2") -> np.ndarray:
     if mode == "raw":
         raw = pixels.astype(np.int16)
         return np.where(raw > 100, UNKNOWN, raw).astype(np.int8)
     p = pixels / 255.0 if negate else (255.0 - pixels) / 255.0
     cells = np.full(p.shape, UNKNOWN, dtype=np.int8)
     if mode == "scale":
-        scaled = np.rint(99.0 * (p - free_thresh) / (occupied_thresh - free_thresh))
+        ratio = (p - free_thresh) / (occupied_thresh - free_thresh)
+        scaled = np.rint(100.0 * ratio) if rounding == "nav2" else np.trunc(99.0 * ratio)
         between = (p >= free_thresh) & (p <= occupied_thresh)
-        cells[between] = np.clip(scaled[between], 1, 99)
+        cells[between] = scaled[between]
     cells[p > occupied_thresh] = OCCUPIED
     cells[p < free_thresh] = FREE
     return cells
+
+
+def _opaque(path: Path, shape) -> np.ndarray:
+    """Which pixels of a map image are opaque (all of a PGM's; an image with an alpha channel:
+    those with alpha 255, which map_server's scale mode requires of a known cell)."""
+    with open(path, "rb") as f:
+        if f.read(2) in (b"P5", b"P2"):
+            return np.ones(shape, dtype=bool)
+    from PIL import Image
+
+    with Image.open(path) as image:
+        if "A" not in image.getbands() and "transparency" not in image.info:
+            return np.ones(shape, dtype=bool)
+        return np.asarray(image.convert("RGBA"))[..., 3] == 255
 
 
 def _finite(value, where: str, key: str) -> float:

@@ -169,7 +169,6 @@ GOOD_YAML = (
         ),
         (GOOD_YAML.replace("resolution: 0.05", "resolution: .nan"), "'resolution' must be finite"),
         (GOOD_YAML.replace("resolution: 0.05\n", ""), "missing key 'resolution'"),
-        (GOOD_YAML + "resolutoin: 0.1\n", "unknown key 'resolutoin'"),
         (GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0]"), "'origin' must be a list"),
         (GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, x, 0.0]"), r"'origin\[1\]' must be a number"),
         (GOOD_YAML.replace("negate: 0", "negate: 2"), "'negate' must be 0 or 1"),
@@ -222,3 +221,41 @@ def test_pgm_with_other_maxval_is_scaled(tmp_path):
     (tmp_path / "m.pgm").write_bytes(b"P5 2 1 # comment\n15\n\x00\x0f")
     dut = mut.load_map(write(tmp_path / "m.yaml", GOOD_YAML))
     np.testing.assert_array_equal(dut.cells, [[100, 0]])
+
+
+def test_keys_map_server_does_not_read_are_ignored_with_one_warning(tmp_path, caplog):
+    (tmp_path / "m.pgm").write_bytes(b"P5\n1 1\n255\n\xfe")
+    path = write(tmp_path / "m.yaml", GOOD_YAML + "map_type: occupancy\nresolutoin: 0.1\n")
+    with caplog.at_level("WARNING"):
+        dut = mut.load_map(path)
+    assert dut.cells.tolist() == [[mut.FREE]]
+    (record,) = caplog.records
+    assert record.getMessage() == (
+        f"{path}: ignored keys map_type, resolutoin (map_server does not read them)"
+    )
+
+
+def test_scale_mode_rounds_like_nav2_or_ros1(tmp_path):
+    """Thresholds 0.01 and 0.99, as nav2's speed mask: grey 128 is p = 127/255, ratio 0.498:
+    nav2 gives rint(49.8) = 50, ROS 1 int(49.3) = 49; grey 205 (ratio 0.190): 19 and 18."""
+    (tmp_path / "m.pgm").write_bytes(b"P5\n4 1\n255\n" + bytes([128, 205, 254, 0]))
+    text = GOOD_YAML.replace("occupied_thresh: 0.65", "occupied_thresh: 0.99")
+    text = text.replace("free_thresh: 0.196", "free_thresh: 0.01") + "mode: scale\n"
+    path = write(tmp_path / "m.yaml", text)
+    assert "free_thresh: 0.01" in path.read_text()
+    assert mut.load_map(path).cells.tolist() == [[50, 19, 0, 100]]
+    assert mut.load_map(path, scale_rounding="ros1").cells.tolist() == [[49, 18, 0, 100]]
+    with pytest.raises(ValueError, match="scale_rounding"):
+        mut.load_map(path, scale_rounding="ros3")
+
+
+def test_scale_mode_reads_transparent_pixels_as_unknown(tmp_path):
+    from PIL import Image
+
+    rgba = np.array([[[0, 0, 0, 255], [0, 0, 0, 0], [254, 254, 254, 128]]], dtype=np.uint8)
+    Image.fromarray(rgba, "RGBA").save(tmp_path / "m.png")
+    text = GOOD_YAML.replace("m.pgm", "m.png")
+    scale = mut.load_map(write(tmp_path / "s.yaml", text + "mode: scale\n"))
+    assert scale.cells.tolist() == [[mut.OCCUPIED, mut.UNKNOWN, mut.UNKNOWN]]
+    trinary = mut.load_map(write(tmp_path / "t.yaml", text))  # alpha ignored, as map_server does
+    assert trinary.cells.tolist() == [[mut.OCCUPIED, mut.OCCUPIED, mut.FREE]]
