@@ -1,10 +1,18 @@
-"""What the lidar robot's two apps (mapping and navigate) share in their recipes: the robot file
-and the flags that choose the arena and the lidar."""
+"""What the lidar robot's two apps (mapping and navigate) share in their recipes: the robot file,
+the flags that choose the world (an arena, or a map's world and a start) and the lidar."""
 
+import math
+from pathlib import Path
+
+from diagrams.mapping_scenario import config_path
 from drake_sim.base import cli
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.map_files import load_map
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params, load_turtlebot3_params, validate
 from drake_sim.runs.recipe import Flag, InputFile, file_flag
+from drake_sim.worlds.arena import Arena, load_arena
+from drake_sim.worlds.map_world import map_arena
 
 ROBOT_FILE = InputFile(
     Turtlebot3Params,
@@ -28,3 +36,41 @@ LIDAR_FLAG = Flag(
     },
 )
 """``--lidar NAME|FILE``: the scenario's ``lidar``, a preset by name or a file."""
+
+WORLD_FLAG = file_flag("--world", "world map file", "map_server .yaml simulated as walls")
+"""``--world MAP``: drive in the world a map describes (``drake_sim.worlds.map_world``)."""
+
+START_FLAG = Flag(
+    "--start",
+    kwargs={
+        "nargs": 3,
+        "type": float,
+        "metavar": ("X", "Y", "YAW"),
+        "help": "the robot's start in a --world: x, y (m), yaw (degrees)",
+    },
+)
+"""``--start X Y YAW``: where the robot starts in a ``--world``."""
+
+
+def load_world(arena: str, world_file, start) -> tuple[Path, Arena]:
+    """The world the robot drives in and its file: the map ``world_file`` describes (its
+    occupied cells walls) with the robot at ``start`` ([x, y, yaw_deg], required there), else
+    the arena ``arena`` names (a scenario's ``arena``; it keeps its own start).
+
+    Raises:
+        ConfigError: a start without a world or a world without a start, a bad map, or a start
+            off the map's free cells.
+    """
+    if not world_file:
+        if start is not None:
+            raise ConfigError(
+                "--start places the robot in a world from a map (--world MAP); an arena keeps "
+                "its own start"
+            )
+        arena_file = config_path(arena)
+        return arena_file, load_arena(arena_file)
+    if start is None:
+        raise ConfigError(f"--world {world_file}: give the robot's start with --start X Y YAW")
+    x, y, yaw = (float(v) for v in start)
+    where = f"--world {world_file}"
+    return Path(world_file), map_arena(load_map(world_file), (x, y, math.radians(yaw)), where=where)

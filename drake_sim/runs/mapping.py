@@ -25,17 +25,25 @@ from diagrams.mapping_scenario import (
 )
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.map_files import OccupancyMap, save_map
+from drake_sim.base.map_files import OccupancyMap, load_map, save_map
 from drake_sim.base.planar import wrap_angle
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.runs import recipe
-from drake_sim.runs.lidar_robot import ARENA_FLAG, LIDAR_FLAG, ROBOT_FILE
+from drake_sim.runs.lidar_robot import (
+    ARENA_FLAG,
+    LIDAR_FLAG,
+    ROBOT_FILE,
+    START_FLAG,
+    WORLD_FLAG,
+    load_world,
+)
 from drake_sim.runs.loop import SimulationRun
 from drake_sim.runs.recipe import AppRecipe, CliText, Flag, InputFile, Inputs
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
 from drake_sim.systems.viewer.teleop import BUTTONS
-from drake_sim.worlds.arena import Arena, arena_grid, load_arena
+from drake_sim.worlds.arena import Arena, arena_grid
+from drake_sim.worlds.map_world import known_truth
 from drake_sim.worlds.route import default_route_file, load_route
 
 DEFAULT_OUT = "maps"
@@ -77,7 +85,8 @@ class MappingRun(SimulationRun):
     writes map_server files and ``report`` scores the map and the poses. ``diagram``:
     ``make_mapping_diagram``'s keywords (``meshcat``, ``teleop``: the Meshcat keys drive
     instead of the route, ``keyframes``: keep the growing map in a Meshcat recording);
-    ``out``: where ``finish`` saves the map (``maps/<arena>`` when None). The scenario's
+    ``out``: where ``finish`` saves the map (``maps/<arena>`` when None); ``world_map``: the
+    map the arena was made from, whose known cells the map is scored on. The scenario's
     ``random_seed`` seeds the odometry errors and the lidar noise."""
 
     check_period = CHECK_PERIOD
@@ -93,9 +102,11 @@ class MappingRun(SimulationRun):
         realtime: bool = False,
         out: Path | str | None = None,
         arena_file: Path | str = "arena",
+        world_map: OccupancyMap | None = None,
         **diagram,
     ):
         self.scenario = scenario
+        self.world_map = world_map  # the map the arena was made from (--world), or None
         self.robot = robot
         self.arena = arena
         self.waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
@@ -179,6 +190,8 @@ class MappingRun(SimulationRun):
         truth_grid = arena_grid(
             self.arena, self.scenario.slam.resolution, height=self.robot.lidar.z
         )
+        if self.world_map is not None:  # a map's world: its known cells are the place
+            truth_grid = known_truth(truth_grid, self.world_map)
         occupancy_map = self.occupancy_map()
         slam_error = np.hypot(*(paths["slam"][:, :2] - paths["truth"][:, :2]).T)
         odom_error = np.hypot(*(paths["odometry"][:, :2] - paths["truth"][:, :2]).T)
@@ -252,13 +265,16 @@ def route_file(scenario: MappingScenario, arena_file: Path) -> Path:
 
 
 def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> MappingRun:
-    """The recipe's run: the scenario's arena and route; ``options``: ``teleop`` (drive with
+    """The recipe's run: the scenario's arena (or ``world``, a map's world, from ``start``) and
+    route; ``options``: ``teleop`` (drive with
     the Meshcat keys instead of the route), ``out`` (the map files, default
     ``maps/<arena>``), ``record`` (keep the map's drawings in the recording)."""
     scenario = inputs.scenario
     teleop = bool(recipe.option(options, "teleop", False))
-    arena_file = config_path(scenario.arena)
-    arena = load_arena(arena_file)
+    world_file, start = recipe.option(options, "world"), recipe.option(options, "start")
+    arena_file, arena = load_world(scenario.arena, world_file, start)
+    if world_file and not teleop and not scenario.route:
+        raise ConfigError(f"--world {world_file}: a map's world has no default route; give --route")
     waypoints = [] if teleop else load_route(route_file(scenario, arena_file), arena).waypoints
     return MappingRun(
         scenario,
@@ -271,6 +287,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
         keyframes=recipe.option(options, "record", None) is not None,
         out=recipe.option(options, "out", None),
         arena_file=arena_file,
+        world_map=load_map(world_file) if world_file else None,
     )
 
 
@@ -282,6 +299,8 @@ RECIPE = AppRecipe(
     make_run=make_run,
     flags=(
         ARENA_FLAG,
+        WORLD_FLAG,
+        START_FLAG,
         LIDAR_FLAG,
         recipe.file_flag(
             "--route", "route file", "route YAML (waypoints to drive)", key="route", group="drive"

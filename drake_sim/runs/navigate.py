@@ -14,7 +14,6 @@ import numpy as np
 from diagrams.navigation_scenario import (
     NavigationScenario,
     check_navigation_scenario,
-    config_path,
     default_scenario_file,
     world_arena,
 )
@@ -22,11 +21,19 @@ from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap, load_map
 from drake_sim.runs import recipe
-from drake_sim.runs.lidar_robot import ARENA_FLAG, LIDAR_FLAG, ROBOT_FILE
+from drake_sim.runs.lidar_robot import (
+    ARENA_FLAG,
+    LIDAR_FLAG,
+    ROBOT_FILE,
+    START_FLAG,
+    WORLD_FLAG,
+    load_world,
+)
 from drake_sim.runs.navigation import CHECK_PERIOD, NavigationReport, NavigationRun
 from drake_sim.runs.recipe import AppRecipe, CliText, Flag, InputFile, Inputs
 from drake_sim.systems.viewer.goal_panel import GoalPanel
-from drake_sim.worlds.arena import arena_grid, load_arena
+from drake_sim.worlds.arena import arena_grid
+from drake_sim.worlds.map_world import check_map_agrees
 from drake_sim.worlds.route import default_goals_file, load_goals, random_goals
 
 GROUND_TRUTH_RESOLUTION = 0.05
@@ -158,9 +165,9 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     guess, [x, y, yaw_deg]; default the true start), ``global_localization``; with a viewer and
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
-    arena_file = config_path(scenario.arena)
-    arena = load_arena(arena_file)
     map_file = recipe.option(options, "map")
+    world_file = recipe.option(options, "world")
+    arena_file, arena = load_world(scenario.arena, world_file, recipe.option(options, "start"))
     if map_file:
         occupancy_map = load_map(map_file)
     else:
@@ -175,6 +182,9 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     )
     goals = _goals(options, arena, arena_file, occupancy_map, interactive, inputs.seed)
     start = np.array(arena.start_pose())
+    if map_file and not world_file:  # a map and an arena: do they describe the same place?
+        poses = [start[:2], *(np.asarray(g, dtype=float)[:2] for g in goals)]
+        check_map_agrees(arena, occupancy_map, poses, f"--map {map_file}, arena {arena_file}")
     global_localization = bool(recipe.option(options, "global_localization", False))
     estimate = None
     if recipe.option(options, "initial_pose") is not None:
@@ -211,6 +221,8 @@ RECIPE = AppRecipe(
     flags=(
         recipe.file_flag("--map", "map file", "map .yaml", required=True),
         ARENA_FLAG,
+        WORLD_FLAG,
+        START_FLAG,
         LIDAR_FLAG,
         _pose_flag("--goal", "one goal: x, y (m), yaw (degrees)", "goals"),
         recipe.file_flag("--goals", "goals file", "goals YAML", group="goals"),

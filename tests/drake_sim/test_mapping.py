@@ -10,6 +10,7 @@ import drake_sim.mapping as mut
 from drake_sim.base import cli
 from drake_sim.base.map_files import load_map
 from drake_sim.base.resources import config_dir
+from tests import navigation_helpers as nh
 from tests.cli_helpers import assert_bad_input, run_module
 
 REPORT_KEYS = {
@@ -150,3 +151,32 @@ def test_a_route_not_completed_exits_with_1(tmp_path):
     assert (tmp_path / "m.partial.pgm").is_file() and (tmp_path / "m.partial.yaml").is_file()
     assert not (tmp_path / "m.yaml").exists()
     assert "partial map" in result.stdout
+
+
+def test_a_short_route_in_a_world_from_a_map(tmp_path, capsys):
+    """The room's saved map simulated as walls (``--world``, ``--start``): the map is scored on
+    the world map's known cells, so it compares with the arena's own run."""
+    _, room_map = nh.saved_truth_map("room", tmp_path)
+    route = tmp_path / "route.yaml"
+    route.write_text("waypoints: [[-2.2, -1.8], [-0.6, -1.8], [-0.6, -1.5]]\n")
+    report_file = tmp_path / "report.json"
+    args = ["--world", str(room_map), "--start", "-2.2", "-1.8", "0", "--route", str(route)]
+    code = _main(*args, "--out", str(tmp_path / "out"), "--report", str(report_file))
+    assert code == 0, capsys.readouterr().err
+    report = json.loads(report_file.read_text())
+    assert report["end"] == "route_done" and report["pose_rmse_m"] < 0.05
+    assert 0.2 < report["known_fraction"] < 0.95
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--world", "MAP"], "give the robot's start with --start"),
+        (["--start", "0", "0", "0"], "--start places the robot in a world from a map"),
+        (["--world", "MAP", "--start", "0", "0", "0"], "give --route"),  # no default route
+    ],
+)
+def test_bad_world_options_are_one_line_and_exit_2(tmp_path, args, needle):
+    _, room_map = nh.saved_truth_map("room", tmp_path)
+    args = [str(room_map) if a == "MAP" else a for a in args]
+    assert_bad_input(_run(*args), needle)

@@ -128,3 +128,47 @@ def test_goals_from_the_page_with_a_viewer(room_map, tmp_path, monkeypatch, caps
     (goal,) = report["goals"]
     assert goal["reached"] and goal["position_error_m"] < 0.05
     assert "1 goals given in the page, 1 reached" in capsys.readouterr().out
+
+
+def test_a_world_from_a_map_alone(room_map, tmp_path, capsys):
+    """The room's saved map simulated as walls (``--world``), the robot placed by ``--start``:
+    no arena file is read."""
+    report_file = tmp_path / "report.json"
+    args = ["--headless", "--map", str(room_map), "--world", str(room_map)]
+    args += [
+        "--start",
+        "-2.0",
+        "-1.5",
+        "0",
+        "--goal",
+        "0",
+        "-1",
+        "90",
+        "--report",
+        str(report_file),
+    ]
+    code = cli.run(mut.main, args)
+    assert code == 0, capsys.readouterr().err
+    report = json.loads(report_file.read_text())
+    assert report["reached_all"] and report["collisions"] == 0
+    assert report["goals"][0]["position_error_m"] < 0.05
+
+
+def test_a_map_of_another_place_is_one_line_and_exit_2(tmp_path):
+    _, maze_map = nh.saved_truth_map("maze", tmp_path)
+    result = _run("--map", str(maze_map), "--goal", "0", "-1", "90")
+    assert_bad_input(result, "the map and the arena do not agree")
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--start", "0", "0", "0"], "--start places the robot in a world from a map"),
+        (["--world", "MAP"], "give the robot's start with --start"),
+        (["--world", "MAP", "--start", "40", "0", "0"], "outside the map"),
+        (["--world", "MAP", "--start", "nan", "0", "0"], "not finite"),
+    ],
+)
+def test_bad_world_options_are_one_line_and_exit_2(room_map, args, needle):
+    args = [str(room_map) if a == "MAP" else a for a in args]
+    assert_bad_input(_run("--map", str(room_map), "--goal", "0", "-1", "0", *args), needle)

@@ -127,3 +127,31 @@ def test_two_arenas_in_one_plant_need_two_names(tmp_path):
     a = mut.add_arena(plant, arena)
     b = mut.add_arena(plant, arena, name="second")
     assert plant.GetModelInstanceName(b) == "second" and a != b
+
+
+def test_a_large_arena_anchors_its_obstacles_on_the_world_body(tmp_path):
+    """More than MAX_LINKS obstacles (a map's world): the ground stays a link, the rest are
+    geometry of the world body, with the same names, and the grid still agrees with them."""
+    posts = "".join(
+        f"  - {{box: {{size: [0.1, 0.1, 0.3], position: [{-2.0 + 0.2 * (i % 20):.1f}, "
+        f"{-1.0 + 0.2 * (i // 20):.1f}]}}}}\n"
+        for i in range(mut.MAX_LINKS + 20)
+    )
+    text = f"size: [5.0, 3.0]\nobstacles:\n{posts}start: {{x: 2.2, y: 1.2, yaw: 0}}\n"
+    arena = _arena(tmp_path, text)
+    plant, instance, query = _plant_with(arena)
+    names = [plant.get_body(b).name() for b in plant.GetBodyIndices(instance)]
+    assert names[0] == "ground" and len(names) == 5  # the ground and the outer walls
+    inspector = query.inspector()
+    anchored = inspector.GetGeometries(inspector.world_frame_id(), Role.kProximity)
+    expected = {f.name for f in arena_footprints(arena)[4:]}
+    assert {inspector.GetName(g).split("::")[-1] for g in anchored} == expected
+    grid = arena_grid(arena, 0.05, height=SCAN_HEIGHT)
+    xs, ys = (np.asarray(v) for v in grid.centres())
+    for r, c in zip(*np.nonzero(grid.cells >= 0), strict=True):
+        p = np.array([xs[r, c], ys[r, c], SCAN_HEIGHT])
+        distances = [d.distance for d in query.ComputeSignedDistanceToPoint(p, 1e-5)]
+        if distances and abs(min(distances)) < 1e-6:
+            continue  # exactly on a face: the grid counts it inside by convention
+        inside = bool(distances) and min(distances) < 0
+        assert inside == (grid.cells[r, c] == 100), p
