@@ -24,6 +24,11 @@ class MappingScenario:
     """The lidar robot mapping an arena along a route (or driven by teleop)."""
 
     arena: str = "arenas/room.yaml"  # Arena file; a relative path is from config/.
+    # A map_server map to drive in instead of the arena, its occupied cells walls
+    # (drake_sim.worlds.map_world); "" for none. A relative path is from config/.
+    world: str = ""
+    # The robot's start in the map's world: [x, y, yaw] in m, m, degrees (an arena keeps its own).
+    start: list[float] = dc.field(default_factory=list)
     route: str = ""  # Route file (relative: from config/); "" for the arena's default route.
     lidar: LidarConfig = dc.field(default_factory=LidarConfig)  # The TurtleBot3's LDS-01.
     odometry: EncoderOdometryConfig = dc.field(default_factory=EncoderOdometryConfig)

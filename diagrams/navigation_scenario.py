@@ -41,6 +41,11 @@ class NavigationScenario:
     """The lidar robot localising on a saved map and driving to goals."""
 
     arena: str = "arenas/room.yaml"  # The world it drives in; a relative path is from config/.
+    # A map_server map to drive in instead of the arena, its occupied cells walls
+    # (drake_sim.worlds.map_world); "" for none. A relative path is from config/.
+    world: str = ""
+    # The robot's start in the map's world: [x, y, yaw] in m, m, degrees (an arena keeps its own).
+    start: list[float] = dc.field(default_factory=list)
     # Obstacles added to the world after mapping (arena obstacle entries): the robot's
     # obstacle layer sees them, its map does not.
     extra_obstacles: list[ExtraObstacle] = dc.field(default_factory=list)

@@ -37,11 +37,14 @@ LIDAR_FLAG = Flag(
 )
 """``--lidar NAME|FILE``: the scenario's ``lidar``, a preset by name or a file."""
 
-WORLD_FLAG = file_flag("--world", "world map file", "map_server .yaml simulated as walls")
-"""``--world MAP``: drive in the world a map describes (``drake_sim.worlds.map_world``)."""
+WORLD_FLAG = file_flag(
+    "--world", "world map file", "map_server .yaml simulated as walls", key="world"
+)
+"""``--world MAP``: the scenario's ``world``, a map to drive in (``drake_sim.worlds.map_world``)."""
 
 START_FLAG = Flag(
     "--start",
+    key="start",
     kwargs={
         "nargs": 3,
         "type": float,
@@ -49,28 +52,32 @@ START_FLAG = Flag(
         "help": "the robot's start in a --world: x, y (m), yaw (degrees)",
     },
 )
-"""``--start X Y YAW``: where the robot starts in a ``--world``."""
+"""``--start X Y YAW``: the scenario's ``start``, where the robot starts in a ``world``."""
 
 
-def load_world(arena: str, world_file, start) -> tuple[Path, Arena]:
-    """The world the robot drives in and its file: the map ``world_file`` describes (its
-    occupied cells walls) with the robot at ``start`` ([x, y, yaw_deg], required there), else
-    the arena ``arena`` names (a scenario's ``arena``; it keeps its own start).
+def load_world(scenario) -> tuple[Path, Arena]:
+    """The world a mapping or navigation scenario's robot drives in, and its file: the map its
+    ``world`` names (occupied cells walls) with the robot at its ``start`` ([x, y, yaw_deg],
+    required there), else its ``arena`` (which keeps its own start).
 
     Raises:
         ConfigError: a start without a world or a world without a start, a bad map, or a start
             off the map's free cells.
     """
-    if not world_file:
+    start = scenario.start or None
+    if not scenario.world:
         if start is not None:
             raise ConfigError(
                 "--start places the robot in a world from a map (--world MAP); an arena keeps "
                 "its own start"
             )
-        arena_file = config_path(arena)
+        arena_file = config_path(scenario.arena)
         return arena_file, load_arena(arena_file)
+    world_file = config_path(scenario.world)
     if start is None:
         raise ConfigError(f"--world {world_file}: give the robot's start with --start X Y YAW")
+    if len(start) != 3:
+        raise ConfigError(f"start must be [x, y, yaw], got {len(start)} values")
     x, y, yaw = (float(v) for v in start)
     where = f"--world {world_file}"
     return Path(world_file), map_arena(load_map(world_file), (x, y, math.radians(yaw)), where=where)

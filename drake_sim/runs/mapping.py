@@ -271,8 +271,8 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
     ``maps/<arena>``), ``record`` (keep the map's drawings in the recording)."""
     scenario = inputs.scenario
     teleop = bool(recipe.option(options, "teleop", False))
-    world_file, start = recipe.option(options, "world"), recipe.option(options, "start")
-    arena_file, arena = load_world(scenario.arena, world_file, start)
+    world_file = scenario.world and config_path(scenario.world)
+    arena_file, arena = load_world(scenario)
     if world_file and not teleop and not scenario.route:
         raise ConfigError(f"--world {world_file}: a map's world has no default route; give --route")
     waypoints = [] if teleop else load_route(route_file(scenario, arena_file), arena).waypoints

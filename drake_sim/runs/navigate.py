@@ -166,8 +166,8 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
     map_file = recipe.option(options, "map")
-    world_file = recipe.option(options, "world")
-    arena_file, arena = load_world(scenario.arena, world_file, recipe.option(options, "start"))
+    world_file = scenario.world
+    arena_file, arena = load_world(scenario)
     if map_file:
         occupancy_map = load_map(map_file)
     else:

@@ -166,7 +166,7 @@ def test_a_map_of_another_place_is_one_line_and_exit_2(tmp_path):
         (["--start", "0", "0", "0"], "--start places the robot in a world from a map"),
         (["--world", "MAP"], "give the robot's start with --start"),
         (["--world", "MAP", "--start", "40", "0", "0"], "outside the map"),
-        (["--world", "MAP", "--start", "nan", "0", "0"], "not finite"),
+        (["--world", "MAP", "--start", "nan", "0", "0"], "must be finite"),
     ],
 )
 def test_bad_world_options_are_one_line_and_exit_2(room_map, args, needle):
