@@ -10,7 +10,9 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 
 from diagrams.lidar_robot import check_lidar_robot_scenario
 from diagrams.mapping_scenario import config_path
+from diagrams.ros_params import amcl_overrides
 from drake_sim.base.checks import fields_of, require_positive
+from drake_sim.base.config import apply_overrides, load_checked
 from drake_sim.base.resources import config_dir
 from drake_sim.navigation.navigator import NavigatorConfig, check_navigator_config
 from drake_sim.systems.estimation.amcl import (
@@ -46,6 +48,9 @@ class NavigationScenario:
     world: str = ""
     # The robot's start in the map's world: [x, y, yaw] in m, m, degrees (an arena keeps its own).
     start: list[float] = dc.field(default_factory=list)
+    # A ROS parameter file (nav2_params.yaml, a ROS 1 amcl YAML or launch file) whose AMCL keys
+    # replace amcl's (diagrams.ros_params); "" for none. A relative path is from config/.
+    params: str = ""
     # Obstacles added to the world after mapping (arena obstacle entries): the robot's
     # obstacle layer sees them, its map does not.
     extra_obstacles: list[ExtraObstacle] = dc.field(default_factory=list)
@@ -99,3 +104,29 @@ def world_arena(scenario: NavigationScenario, arena: Arena, where: str = "scenar
 def default_scenario_file() -> Path:
     """Returns ``config/navigation_scenario.yaml``."""
     return config_dir() / "navigation_scenario.yaml"
+
+
+def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
+    """The scenario at ``path`` with ``overrides`` (``KEY=VALUE`` or ``(label, KEY=VALUE)``)
+    applied, its ``params`` file's AMCL keys under them (the file's values first, the
+    overrides' on top: a ``--set amcl.x=...`` still wins), checked.
+
+    Raises:
+        ConfigError: naming the file (the scenario's, the parameter file's or ``--set``) and
+            the key at fault.
+    """
+    overrides = list(overrides)
+    what = "scenario file"
+    scenario = load_checked(NavigationScenario, path, check_navigation_scenario, what=what)
+    base = scenario
+    if overrides:
+        scenario = apply_overrides(NavigationScenario, scenario, overrides)
+    if not scenario.params:
+        return check_navigation_scenario(scenario, "--set")
+    params = config_path(scenario.params)
+    where = str(params)
+    labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in amcl_overrides(params)]
+    base = check_navigation_scenario(apply_overrides(NavigationScenario, base, labelled), where)
+    if overrides:
+        base = apply_overrides(NavigationScenario, base, overrides)
+    return check_navigation_scenario(base, "--set")

@@ -15,6 +15,7 @@ from diagrams.navigation_scenario import (
     NavigationScenario,
     check_navigation_scenario,
     default_scenario_file,
+    load_navigation_scenario,
     world_arena,
 )
 from drake_sim.base import cli
@@ -215,7 +216,12 @@ def _pose_flag(name: str, help_text: str, group: str) -> Flag:
 RECIPE = AppRecipe(
     name="navigate",
     robot=ROBOT_FILE,
-    scenario=InputFile(NavigationScenario, default_scenario_file, check_navigation_scenario),
+    scenario=InputFile(
+        NavigationScenario,
+        default_scenario_file,
+        check_navigation_scenario,
+        load_overridden=load_navigation_scenario,
+    ),
     seed_key="random_seed",
     make_run=make_run,
     flags=(
@@ -223,6 +229,12 @@ RECIPE = AppRecipe(
         ARENA_FLAG,
         WORLD_FLAG,
         START_FLAG,
+        recipe.file_flag(
+            "--params",
+            "parameter file",
+            "nav2_params.yaml, ROS 1 amcl YAML or launch file: its AMCL keys",
+            key="params",
+        ),
         LIDAR_FLAG,
         _pose_flag("--goal", "one goal: x, y (m), yaw (degrees)", "goals"),
         recipe.file_flag("--goals", "goals file", "goals YAML", group="goals"),

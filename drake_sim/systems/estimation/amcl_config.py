@@ -16,6 +16,9 @@ from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 
+ODOM_MODELS = ("diff-corrected", "diff", "omni-corrected", "omni")
+"""ROS amcl's odometry models (``odom_model_type``)."""
+
 
 @dc.dataclass
 class AmclConfig:
@@ -47,11 +50,14 @@ class AmclConfig:
     laser_sigma_hit: float = 0.2  # m, std dev of the hit part, > 0.
     laser_likelihood_max_dist: float = 2.0  # m, cap of the distance field, > 0.
     laser_model_type: str = "likelihood_field"  # The only model implemented.
-    odom_model_type: str = "diff-corrected"  # The only model implemented (differential drive).
+    # ROS's odometry models: diff-corrected, diff (ROS 1's original: the alphas' mix used as a
+    # standard deviation, not a variance), omni-corrected, omni (holonomic: alpha5 strafes).
+    odom_model_type: str = "diff-corrected"
     odom_alpha1: float = 0.2  # Rotation noise from rotation, >= 0.
     odom_alpha2: float = 0.2  # Rotation noise from translation, >= 0.
     odom_alpha3: float = 0.2  # Translation noise from translation, >= 0.
     odom_alpha4: float = 0.2  # Translation noise from rotation, >= 0.
+    odom_alpha5: float = 0.2  # Strafe noise from translation (omni models only), >= 0.
     # Scan-to-map refinement (ours, not a ROS parameter): after each filter update, match the
     # scan (every beam in range) against the map from the estimate (``scan_matcher``) and take
     # the match as the estimate when it converged, moved less than the gate and scores well.
@@ -109,7 +115,7 @@ def check_amcl_config(
     for key in ("initial_cov_xx", "initial_cov_yy", "initial_cov_aa"):
         if getattr(config, key) < 0:
             fail(key, "non-negative")
-    for key in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4"):
+    for key in ("odom_alpha1", "odom_alpha2", "odom_alpha3", "odom_alpha4", "odom_alpha5"):
         if getattr(config, key) < 0:
             fail(key, "non-negative")
     if config.laser_z_hit + config.laser_z_rand <= 0:
@@ -148,8 +154,8 @@ def check_amcl_config(
             fail(key, "at least 1")
     if config.laser_model_type != "likelihood_field":
         fail("laser_model_type", "'likelihood_field' (the only model implemented)")
-    if config.odom_model_type != "diff-corrected":
-        fail("odom_model_type", "'diff-corrected' (the only model implemented)")
+    if config.odom_model_type not in ODOM_MODELS:
+        fail("odom_model_type", f"one of {', '.join(ODOM_MODELS)}")
     return config
 
 

@@ -13,6 +13,8 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
 * motion: ``sample_motion_model_odometry`` (Table 5.6), ROS's ``diff-corrected`` model: the
   odometry's motion since the last filter update is split into a turn, a straight move and a
   turn, each perturbed by zero-mean Gaussian noise whose variance mixes ``odom_alpha1..4``;
+  ROS 1's ``diff`` takes that mix as the standard deviation, and the ``omni`` models move a
+  holonomic robot by a straight move, a sideways one (``odom_alpha5``) and a turn;
 * sensor: the likelihood field (Table 6.3): a beam's end point at distance ``d`` from the
   nearest occupied cell scores ``pz = z_hit * exp(-d^2 / (2 sigma_hit^2)) + z_rand /
   range_max`` (the Gaussian unnormalised, as in ROS); ``laser_max_beams`` beams evenly spread
@@ -213,31 +215,50 @@ class ParticleFilter:
         self._estimate = cluster_estimate(self.particles, self.weights)
 
     def _move(self, old, new) -> None:
-        """sample_motion_model_odometry, ROS's diff-corrected model."""
+        """sample_motion_model_odometry with ROS's ``odom_model_type`` (``_spread`` for how the
+        alphas mix)."""
         c = self.config
         dx, dy = new[0] - old[0], new[1] - old[1]
         trans = math.hypot(dx, dy)
+        n = len(self.particles)
+        noise = self._rng.standard_normal((3, n))
+        p = self.particles
+        if c.odom_model_type.startswith("omni"):
+            turn = float(wrap_angle(new[2] - old[2]))
+            a = c.odom_alpha1, c.odom_alpha2, c.odom_alpha3, c.odom_alpha4, c.odom_alpha5
+            trans_hat = trans + noise[0] * self._spread(a[2] * trans**2 + a[0] * turn**2)
+            turn_hat = turn + noise[1] * self._spread(a[3] * turn**2 + a[1] * trans**2)
+            strafe_hat = noise[2] * self._spread(a[0] * turn**2 + a[4] * trans**2)
+            bearing = math.atan2(dy, dx) - old[2] + p[:, 2]
+            cos, sin = np.cos(bearing), np.sin(bearing)
+            p[:, 0] += trans_hat * cos + strafe_hat * sin
+            p[:, 1] += trans_hat * sin - strafe_hat * cos
+            p[:, 2] = wrap_angle(p[:, 2] + turn_hat)
+            return
         rot1 = 0.0 if trans < 0.01 else float(wrap_angle(math.atan2(dy, dx) - old[2]))
         rot2 = float(wrap_angle(new[2] - old[2] - rot1))
         # Backwards motion is a small turn, not a half turn, in the noise model.
         rot1_noise = min(abs(rot1), abs(float(wrap_angle(rot1 - math.pi))))
         rot2_noise = min(abs(rot2), abs(float(wrap_angle(rot2 - math.pi))))
-        n = len(self.particles)
-        noise = self._rng.standard_normal((3, n))
-        rot1_hat = rot1 - noise[0] * math.sqrt(
+        rot1_hat = rot1 - noise[0] * self._spread(
             c.odom_alpha1 * rot1_noise**2 + c.odom_alpha2 * trans**2
         )
-        trans_hat = trans - noise[1] * math.sqrt(
+        trans_hat = trans - noise[1] * self._spread(
             c.odom_alpha3 * trans**2 + c.odom_alpha4 * (rot1_noise**2 + rot2_noise**2)
         )
-        rot2_hat = rot2 - noise[2] * math.sqrt(
+        rot2_hat = rot2 - noise[2] * self._spread(
             c.odom_alpha1 * rot2_noise**2 + c.odom_alpha2 * trans**2
         )
-        p = self.particles
         heading = p[:, 2] + rot1_hat
         p[:, 0] += trans_hat * np.cos(heading)
         p[:, 1] += trans_hat * np.sin(heading)
         p[:, 2] = wrap_angle(heading + rot2_hat)
+
+    def _spread(self, mix: float) -> float:
+        """The standard deviation of a noise term whose alphas mix to ``mix``: its square root
+        in the corrected models; ``mix`` itself in ROS 1's original ``diff`` and ``omni``, which
+        passed the variance as the standard deviation (their alphas are tuned for that)."""
+        return math.sqrt(mix) if self.config.odom_model_type.endswith("-corrected") else mix
 
     def _sense(self, ranges, angles, range_max, range_min, sensor) -> None:
         """Likelihood-field sensor model; reweights the particles, updates w_slow and w_fast."""

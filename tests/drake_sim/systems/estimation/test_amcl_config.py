@@ -24,7 +24,8 @@ from drake_sim.base.errors import ConfigError
         ("laser_sigma_hit", float("nan"), "finite"),
         ("laser_max_beams", 1, "at least 2"),
         ("odom_alpha3", -1.0, "non-negative"),
-        ("odom_model_type", "omni", "diff-corrected"),
+        ("odom_model_type", "tricycle", "one of diff-corrected, diff, omni-corrected, omni"),
+        ("odom_alpha5", -0.1, "non-negative"),
         ("laser_model_type", "beam", "likelihood_field"),
         ("refinement_max_correction", 0.0, "positive"),
         ("refinement_max_correction_a", -0.1, "positive"),
@@ -48,7 +49,7 @@ def test_bad_values_name_the_key(key, value, words):
 @pytest.mark.parametrize(
     "text, words",
     [
-        ("min_particles: 100\nodom_alpha5: 0.2\n", "unknown key 'odom_alpha5'"),
+        ("min_particles: 100\nodom_alpha6: 0.2\n", "unknown key 'odom_alpha6'"),
         ("kld_err: .nan\n", "'kld_err' must be finite"),
         ("laser_max_beams: [1\n", "malformed YAML"),
         ("update_min_a: -1\n", "'update_min_a' must be non-negative"),

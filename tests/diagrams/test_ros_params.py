@@ -1,0 +1,147 @@
+"""ROS parameter files (nav2, ROS 1 YAML and launch XML) as the navigation scenario's AMCL keys."""
+
+from pathlib import Path
+
+import pytest
+
+import diagrams.ros_params as mut
+from diagrams.navigation_scenario import default_scenario_file, load_navigation_scenario
+from drake_sim.base.errors import ConfigError
+
+NAV2 = """amcl:
+  ros__parameters:
+    alpha1: 0.3
+    alpha5: 0.1
+    max_beams: 45
+    z_hit: 0.6
+    z_rand: 0.4
+    sigma_hit: 0.15
+    pf_err: 0.04
+    pf_z: 0.98
+    min_particles: 300
+    robot_model_type: "nav2_amcl::OmniMotionModel"
+    initial_pose: {x: 1.0, y: -0.5, z: 0.0, yaw: 0.25}
+    tf_broadcast: true
+controller_server:
+  ros__parameters:
+    FollowPath: {max_vel_x: 0.26}
+"""
+
+ROS1_YAML = "odom_model_type: diff\nodom_alpha3: 0.8\nlaser_z_max: 0.05\nkld_err: 0.03\n"
+
+LAUNCH = """<launch>
+  <arg name="scan_topic" default="scan"/>
+  <arg name="beams" default="40"/>
+  <node pkg="amcl" type="amcl" name="amcl">
+    <param name="odom_model_type" value="omni"/>
+    <param name="laser_max_beams" value="$(arg beams)"/>
+    <param name="selective_resampling" value="true"/>
+    <param name="gui_publish_rate" value="10.0"/>
+    <remap from="scan" to="$(arg scan_topic)"/>
+  </node>
+  <node pkg="map_server" type="map_server" name="map_server">
+    <param name="frame_id" value="map"/>
+  </node>
+</launch>
+"""
+
+
+def write(tmp_path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
+    path = write(tmp_path, "nav2_params.yaml", NAV2)
+    with caplog.at_level("WARNING"):
+        overrides = dict(o.split("=", 1) for o in mut.amcl_overrides(path))
+    assert overrides == {
+        "amcl.odom_alpha1": "0.3",
+        "amcl.odom_alpha5": "0.1",
+        "amcl.laser_max_beams": "45",
+        "amcl.laser_z_hit": "0.6",
+        "amcl.laser_z_rand": "0.4",
+        "amcl.laser_sigma_hit": "0.15",
+        "amcl.kld_err": "0.04",
+        "amcl.kld_z": "0.98",
+        "amcl.min_particles": "300",
+        "amcl.odom_model_type": '"omni-corrected"',
+        "amcl.initial_pose_x": "1.0",
+        "amcl.initial_pose_y": "-0.5",
+        "amcl.initial_pose_a": "0.25",
+    }
+    (record,) = caplog.records
+    message = record.getMessage()
+    assert message.startswith(f"{path}: ignored keys ")
+    for key in (
+        "amcl.tf_broadcast",
+        "amcl.initial_pose.z",
+        "controller_server.FollowPath.max_vel_x",
+    ):
+        assert key in message
+
+
+def test_ros1_yaml_and_launch_files(tmp_path):
+    assert mut.amcl_overrides(write(tmp_path, "amcl.yaml", ROS1_YAML)) == [
+        'amcl.odom_model_type="diff"',
+        "amcl.odom_alpha3=0.8",
+        "amcl.kld_err=0.03",
+    ]
+    assert mut.amcl_overrides(write(tmp_path, "amcl.launch", LAUNCH)) == [
+        'amcl.odom_model_type="omni"',
+        "amcl.laser_max_beams=40",
+        "amcl.selective_resampling=true",
+    ]
+
+
+@pytest.mark.parametrize(
+    "name, text, needle",
+    [
+        ("a.yaml", "amcl: [1, 2\n", "malformed YAML"),
+        ("a.yaml", "- 1\n", "expected a mapping"),
+        ("a.launch", "<launch><node pkg='amcl'>", "malformed launch XML"),
+        ("a.launch", LAUNCH.replace('default="40"', ""), r"\$\(arg beams\) has no value"),
+        ("a.yaml", "controller_server: {ros__parameters: {x: 1}}\n", "no amcl parameters"),
+        ("a.yaml", NAV2.replace("OmniMotionModel", "Tricycle"), "robot_model_type"),
+    ],
+)
+def test_malformed_files_are_one_config_error(tmp_path, name, text, needle):
+    with pytest.raises(ConfigError, match=needle):
+        mut.amcl_overrides(write(tmp_path, name, text))
+
+
+def test_the_scenario_takes_a_parameter_file_under_its_overrides(tmp_path):
+    path = write(tmp_path, "nav2_params.yaml", NAV2)
+    scenario = load_navigation_scenario(default_scenario_file(), [f"params={path}"])
+    assert scenario.amcl.odom_alpha1 == 0.3 and scenario.amcl.odom_model_type == "omni-corrected"
+    assert scenario.amcl.laser_max_beams == 45
+    # A --set of the same key wins over the file, in any order.
+    sets = ["amcl.laser_max_beams=90", f"params={path}"]
+    assert load_navigation_scenario(default_scenario_file(), sets).amcl.laser_max_beams == 90
+    bad = write(tmp_path, "bad.yaml", NAV2.replace("alpha1: 0.3", "alpha1: -1.0"))
+    with pytest.raises(ConfigError, match=f"{bad}: 'amcl.odom_alpha1' must be non-negative"):
+        load_navigation_scenario(default_scenario_file(), [f"params={bad}"])
+
+
+REAL = Path(__file__).resolve().parents[3] / "shared" / "real_ros" / "params"
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "nav2_main/nav2_params.yaml",
+        "nav2_humble/nav2_params.yaml",
+        "turtlebot3_humble/waffle.yaml",
+        "turtlebot3_main/waffle.yaml",
+        "ros1_navigation/amcl_diff.launch",
+        "ros1_navigation/amcl_omni.launch",
+        "turtlebot3_noetic/amcl.launch",
+    ],
+)
+def test_real_parameter_files_load_into_the_scenario(name):
+    path = REAL / name
+    if not path.is_file():
+        pytest.skip(f"no {path} (third-party files beside the checkout, not in the repository)")
+    scenario = load_navigation_scenario(default_scenario_file(), [f"params={path}"])
+    assert scenario.amcl.min_particles >= 1
