@@ -10,7 +10,7 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 
 from diagrams.lidar_robot import check_lidar_robot_scenario
 from diagrams.mapping_scenario import config_path
-from diagrams.ros_params import amcl_overrides
+from diagrams.ros_params import ros_overrides
 from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.config import apply_overrides, load_checked
 from drake_sim.base.resources import config_dir
@@ -125,7 +125,7 @@ def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
         return check_navigation_scenario(scenario, "--set")
     params = config_path(scenario.params)
     where = str(params)
-    labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in amcl_overrides(params)]
+    labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in ros_overrides(params)]
     base = check_navigation_scenario(apply_overrides(NavigationScenario, base, labelled), where)
     if overrides:
         base = apply_overrides(NavigationScenario, base, overrides)

@@ -2,18 +2,33 @@
 
 Three forms are read, as ROS users have them:
 
-* nav2's ``nav2_params.yaml``: a node name, then ``ros__parameters``, then the node's keys
-  (``amcl: {ros__parameters: {alpha1: 0.2, ...}}``);
-* a ROS 1 parameter YAML (rosparam): the node's keys at the top (``amcl.yaml``);
+* nav2's ``nav2_params.yaml``: node names, then ``ros__parameters``, then the node's keys
+  (``amcl: {ros__parameters: {alpha1: 0.2, ...}}``, ``local_costmap: {local_costmap:
+  {ros__parameters: ...}}``);
+* a ROS 1 parameter YAML (rosparam): a node's keys at the top, or under their namespaces
+  (``DWAPlannerROS: {max_vel_x: ...}``, costmap_common's keys);
 * a ROS 1 launch XML: the ``<param name= value=>`` elements of its ``amcl`` node
   (``$(arg name)`` replaced by the ``<arg>``'s default or value).
 
-The AMCL keys become ``amcl.*`` keys of the scenario (``AmclConfig``): ROS 1's names are the
-scenario's; nav2's renamed ones are mapped back (``alpha1``-``alpha5`` to ``odom_alpha*``,
-``max_beams``, ``z_hit``, ``z_rand``, ``sigma_hit``, ``pf_err``, ``pf_z``, ``robot_model_type``,
-``initial_pose``). Every other key, of AMCL or of another node (costmaps, DWB, NavFn: not yet
-mapped), is listed in one warning line as ignored; a value is checked by the scenario's own
-checks, so a malformed one is one ``ConfigError`` naming the file and the key.
+What is mapped (to the scenario's keys, ``--set``'s names):
+
+* AMCL -> ``amcl.*`` (``AmclConfig``): ROS 1's names are the scenario's; nav2's renamed ones
+  are mapped back (``alpha1``-``alpha5``, ``max_beams``, ``z_hit``, ``z_rand``, ``sigma_hit``,
+  ``pf_err``, ``pf_z``, ``robot_model_type``, ``initial_pose``);
+* costmaps -> ``navigator.costmap.*``: ``robot_radius``, the inflation layer's
+  ``inflation_radius`` and ``cost_scaling_factor``, the obstacle sources' ranges (ROS 1's
+  ``obstacle_range``, ``raytrace_range``), ``track_unknown_space``, the local costmap's
+  ``width`` and ``height`` (one costmap here: a key in both costmaps takes the later value);
+* DWA (ROS 1) and DWB (nav2, only when ``FollowPath`` is DWB: MPPI's keys mean other things)
+  -> ``navigator.controller.*``: speed and acceleration limits, ``sim_time``, samples, the
+  scoring biases, the goal checker's tolerances, ``controller_frequency``;
+* NavFn and GlobalPlanner -> ``navigator.planner.*``: ``tolerance``, ``use_astar`` (or
+  ``use_dijkstra``, inverted), ``allow_unknown``, ``neutral_cost``, ``cost_factor``,
+  ``lethal_cost``.
+
+Every other key (frames, topics, rates, ``footprint`` polygons, other plugins) is listed in one
+warning line as ignored. Values are checked by the scenario's own checks, so a malformed one is
+one ``ConfigError`` naming the file and the (scenario's) key.
 """
 
 from __future__ import annotations
@@ -48,58 +63,146 @@ _MOTION_MODELS = {
 }
 """nav2's ``robot_model_type`` plugins, as ROS 1's ``odom_model_type``."""
 
+_CONTROLLER = {
+    **{k: k for k in ("max_vel_x", "min_vel_x", "max_vel_theta", "min_vel_theta", "acc_lim_x")},
+    **{k: k for k in ("acc_lim_theta", "sim_time", "vx_samples", "vtheta_samples")},
+    **{k: k for k in ("path_distance_bias", "goal_distance_bias", "occdist_scale")},
+    **{k: k for k in ("forward_point_distance", "xy_goal_tolerance", "yaw_goal_tolerance")},
+    "controller_frequency": "controller_frequency",
+    "max_rot_vel": "max_vel_theta",  # ROS 1 DWA's older names
+    "min_rot_vel": "min_vel_theta",
+    "acc_lim_th": "acc_lim_theta",
+    "vth_samples": "vtheta_samples",
+}
+"""DWA / DWB keys (the last name of their path) -> ``navigator.controller`` keys."""
+_COSTMAP = {
+    **{k: k for k in ("robot_radius", "inflation_radius", "cost_scaling_factor")},
+    **{k: k for k in ("obstacle_max_range", "obstacle_min_range", "raytrace_max_range")},
+    "track_unknown_space": "track_unknown_space",
+    "obstacle_range": "obstacle_max_range",  # ROS 1
+    "raytrace_range": "raytrace_max_range",
+    "width": "local_width",  # the local (rolling) costmap's
+    "height": "local_height",
+}
+"""Costmap keys -> ``navigator.costmap`` keys (one costmap here: the later file value wins)."""
+_PLANNER = {
+    **{k: k for k in ("tolerance", "use_astar", "allow_unknown", "neutral_cost", "cost_factor")},
+    "lethal_cost": "lethal_cost",
+}
+"""NavFn / GlobalPlanner keys -> ``navigator.planner`` keys (``use_dijkstra`` is inverted)."""
+_LOCAL_PLANNERS = ("DWAPlannerROS", "TrajectoryPlannerROS", "FollowPath", "move_base")
+_GLOBAL_PLANNERS = ("GlobalPlanner", "NavfnROS", "GridBased")
 
-def amcl_overrides(path: Path | str) -> list[str]:
-    """The ``amcl.KEY=VALUE`` overrides a parameter file holds (see the module); logs one
-    warning line naming every key it ignores.
+
+def ros_overrides(path: Path | str) -> list[str]:
+    """The scenario overrides (``amcl.*``, ``navigator.costmap.*``, ``navigator.controller.*``,
+    ``navigator.planner.*``) a parameter file holds (see the module); logs one warning line
+    naming every key it ignores.
 
     Raises:
-        ConfigError: an unreadable or malformed file, or one with no AMCL keys at all.
+        ConfigError: an unreadable or malformed file.
     """
     path = Path(path)
     where = str(path)
     text = read_text(path, "parameter file")
     if path.suffix in (".launch", ".xml") or text.lstrip().startswith("<"):
         amcl, ignored = _launch_params(text, where)
+        navigator = {}
     else:
-        amcl, ignored = _yaml_params(parse_yaml(text, where), where)
+        amcl, navigator, ignored = _yaml_params(parse_yaml(text, where), where)
     overrides = [f"amcl.{key}={json.dumps(value)}" for key, value in amcl.items()]
+    overrides += [f"navigator.{key}={json.dumps(value)}" for key, value in navigator.items()]
     if ignored:
         _log.warning("%s: ignored keys %s (no meaning here yet)", where, ", ".join(ignored))
-    if not overrides:
-        raise ConfigError(f"{where}: no amcl parameters found")
     return overrides
 
 
-def _yaml_params(tree, where: str) -> tuple[dict, list[str]]:
+def _nodes(tree: dict, prefix: tuple = ()) -> list[tuple[tuple, dict]]:
+    """nav2's nodes: (the keys down to a ``ros__parameters``, its parameters), at any depth
+    (``local_costmap: {local_costmap: {ros__parameters: ...}}``)."""
+    found = []
+    for name, block in tree.items():
+        if not isinstance(block, dict):
+            continue
+        if isinstance(block.get("ros__parameters"), dict):
+            found.append(((*prefix, str(name)), block["ros__parameters"]))
+        else:
+            found += _nodes(block, (*prefix, str(name)))
+    return found
+
+
+def _yaml_params(tree, where: str) -> tuple[dict, dict, list[str]]:
     if not isinstance(tree, dict):
         raise ConfigError(f"{where}: expected a mapping of parameters")
-    nodes = {
-        name: block["ros__parameters"]
-        for name, block in tree.items()
-        if isinstance(block, dict) and isinstance(block.get("ros__parameters"), dict)
-    }
-    if not nodes:  # ROS 1: one node's keys at the top level
-        return _amcl(tree, nav2=False, where=where)
-    amcl, ignored = {}, []
-    for name, params in nodes.items():
-        if name == "amcl":
+    nodes = _nodes(tree)
+    if not nodes:  # ROS 1: a node's keys at the top level, or under their namespaces
+        amcl, rest = _amcl(tree, nav2=False, where=where)
+        navigator, ignored = _navigator({k: tree[k] for k in rest}, (), where)
+        return amcl, navigator, ignored
+    amcl, navigator, ignored = {}, {}, []
+    for names, params in nodes:
+        if names[-1] == "amcl":
             amcl, skipped = _amcl(params, nav2=True, where=where)
             ignored += [f"amcl.{key}" for key in skipped]
         else:
-            ignored += [f"{name}.{key}" for key in _flat(params)]
-    ignored += [str(name) for name in tree if name not in nodes]
-    return amcl, ignored
+            mapped, skipped = _navigator(params, names, where)
+            navigator.update(mapped)
+            ignored += [f"{names[-1]}.{key}" for key in skipped]
+    held = {names[0] for names, _ in nodes}
+    ignored += [str(name) for name in tree if name not in held]
+    return amcl, navigator, ignored
 
 
-def _flat(params: dict, prefix: str = "") -> list[str]:
-    keys = []
+def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
+    """(``navigator`` key -> value, ignored dotted keys) of a costmap, controller or planner
+    node's parameters (nav2: ``node`` its names; ROS 1: empty, namespaces in the keys)."""
+    mapped, ignored = {}, []
+    for path, value in _flat(params):
+        target = _target((*node, *path), params)
+        if target is None:
+            ignored.append(".".join(path))
+        else:
+            section, key = target
+            if key == "use_dijkstra":
+                key, value = "use_astar", not value
+            mapped[f"{section}.{key}"] = value
+    return mapped, ignored
+
+
+def _target(path: tuple, params: dict) -> tuple[str, str] | None:
+    """Where a parameter at ``path`` (node names, namespaces and key) goes, or None."""
+    key = path[-1]
+    scope = set(path[:-1])
+    if key == "controller_frequency":  # move_base's and controller_server's
+        return "controller", key
+    if scope & {"controller_server", *_LOCAL_PLANNERS} and key in _CONTROLLER:
+        follow = params.get("FollowPath", {})
+        if "FollowPath" in scope and "dwb" not in str(follow.get("plugin", "dwb")).lower():
+            return None  # another controller (MPPI, RPP): its keys mean other things
+        return "controller", _CONTROLLER[key]
+    if scope & {"planner_server", *_GLOBAL_PLANNERS} and (key in _PLANNER or key == "use_dijkstra"):
+        return "planner", key
+    costmap = scope & {"local_costmap", "global_costmap"} or not scope & {
+        "controller_server",
+        "planner_server",
+        *_LOCAL_PLANNERS,
+        *_GLOBAL_PLANNERS,
+    }
+    if costmap and key in _COSTMAP:
+        if key in ("width", "height") and "local_costmap" not in scope:
+            return None  # a global costmap's size is the map's here
+        return "costmap", _COSTMAP[key]
+    return None
+
+
+def _flat(params: dict, prefix: tuple = ()) -> list[tuple[tuple, object]]:
+    items = []
     for key, value in params.items():
         if isinstance(value, dict):
-            keys += _flat(value, f"{prefix}{key}.")
+            items += _flat(value, (*prefix, str(key)))
         else:
-            keys.append(f"{prefix}{key}")
-    return keys
+            items.append(((*prefix, str(key)), value))
+    return items
 
 
 def _amcl(params: dict, *, nav2: bool, where: str) -> tuple[dict, list[str]]:

@@ -24,7 +24,20 @@ NAV2 = """amcl:
     tf_broadcast: true
 controller_server:
   ros__parameters:
-    FollowPath: {max_vel_x: 0.26}
+    controller_frequency: 15.0
+    general_goal_checker: {xy_goal_tolerance: 0.08, stateful: true}
+    FollowPath: {plugin: "dwb_core::DWBLocalPlanner", max_vel_x: 0.26}
+local_costmap:
+  local_costmap:
+    ros__parameters:
+      width: 4
+      robot_radius: 0.2
+      footprint: "[[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]"
+      inflation_layer: {inflation_radius: 0.6, cost_scaling_factor: 4.0}
+      obstacle_layer: {scan: {obstacle_max_range: 2.0, raytrace_max_range: 2.5}}
+planner_server:
+  ros__parameters:
+    GridBased: {plugin: "nav2_navfn_planner::NavfnPlanner", tolerance: 0.3, use_astar: false}
 """
 
 ROS1_YAML = "odom_model_type: diff\nodom_alpha3: 0.8\nlaser_z_max: 0.05\nkld_err: 0.03\n"
@@ -55,7 +68,7 @@ def write(tmp_path, name: str, text: str) -> Path:
 def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
     path = write(tmp_path, "nav2_params.yaml", NAV2)
     with caplog.at_level("WARNING"):
-        overrides = dict(o.split("=", 1) for o in mut.amcl_overrides(path))
+        overrides = dict(o.split("=", 1) for o in mut.ros_overrides(path))
     assert overrides == {
         "amcl.odom_alpha1": "0.3",
         "amcl.odom_alpha5": "0.1",
@@ -70,25 +83,55 @@ def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
         "amcl.initial_pose_x": "1.0",
         "amcl.initial_pose_y": "-0.5",
         "amcl.initial_pose_a": "0.25",
+        "navigator.controller.controller_frequency": "15.0",
+        "navigator.controller.xy_goal_tolerance": "0.08",
+        "navigator.controller.max_vel_x": "0.26",
+        "navigator.costmap.local_width": "4",
+        "navigator.costmap.robot_radius": "0.2",
+        "navigator.costmap.inflation_radius": "0.6",
+        "navigator.costmap.cost_scaling_factor": "4.0",
+        "navigator.costmap.obstacle_max_range": "2.0",
+        "navigator.costmap.raytrace_max_range": "2.5",
+        "navigator.planner.tolerance": "0.3",
+        "navigator.planner.use_astar": "false",
     }
     (record,) = caplog.records
     message = record.getMessage()
     assert message.startswith(f"{path}: ignored keys ")
-    for key in (
-        "amcl.tf_broadcast",
-        "amcl.initial_pose.z",
-        "controller_server.FollowPath.max_vel_x",
-    ):
+    for key in ("amcl.tf_broadcast", "amcl.initial_pose.z", "local_costmap.footprint"):
         assert key in message
+    assert "general_goal_checker.stateful" in message and "max_vel_x" not in message
+
+
+def test_ros1_costmap_and_dwa_files(tmp_path):
+    costmap = "obstacle_range: 3.0\nraytrace_range: 3.5\ninflation_radius: 1.0\nmap_type: costmap\n"
+    assert mut.ros_overrides(write(tmp_path, "costmap.yaml", costmap)) == [
+        "navigator.costmap.obstacle_max_range=3.0",
+        "navigator.costmap.raytrace_max_range=3.5",
+        "navigator.costmap.inflation_radius=1.0",
+    ]
+    dwa = "DWAPlannerROS:\n  max_vel_x: 0.26\n  vth_samples: 40\n  max_vel_y: 0.0\n"
+    dwa += "GlobalPlanner: {use_dijkstra: true}\n"
+    assert mut.ros_overrides(write(tmp_path, "dwa.yaml", dwa)) == [
+        "navigator.controller.max_vel_x=0.26",
+        "navigator.controller.vtheta_samples=40",
+        "navigator.planner.use_astar=false",
+    ]
+
+
+def test_another_controller_s_keys_are_not_taken_for_dwb(tmp_path):
+    mppi = '{plugin: "nav2_mppi_controller::MPPIController", max_vel_x: 9.0}'
+    text = f"controller_server:\n  ros__parameters:\n    FollowPath: {mppi}\n"
+    assert mut.ros_overrides(write(tmp_path, "mppi.yaml", text)) == []  # all of it ignored
 
 
 def test_ros1_yaml_and_launch_files(tmp_path):
-    assert mut.amcl_overrides(write(tmp_path, "amcl.yaml", ROS1_YAML)) == [
+    assert mut.ros_overrides(write(tmp_path, "amcl.yaml", ROS1_YAML)) == [
         'amcl.odom_model_type="diff"',
         "amcl.odom_alpha3=0.8",
         "amcl.kld_err=0.03",
     ]
-    assert mut.amcl_overrides(write(tmp_path, "amcl.launch", LAUNCH)) == [
+    assert mut.ros_overrides(write(tmp_path, "amcl.launch", LAUNCH)) == [
         'amcl.odom_model_type="omni"',
         "amcl.laser_max_beams=40",
         "amcl.selective_resampling=true",
@@ -102,13 +145,12 @@ def test_ros1_yaml_and_launch_files(tmp_path):
         ("a.yaml", "- 1\n", "expected a mapping"),
         ("a.launch", "<launch><node pkg='amcl'>", "malformed launch XML"),
         ("a.launch", LAUNCH.replace('default="40"', ""), r"\$\(arg beams\) has no value"),
-        ("a.yaml", "controller_server: {ros__parameters: {x: 1}}\n", "no amcl parameters"),
         ("a.yaml", NAV2.replace("OmniMotionModel", "Tricycle"), "robot_model_type"),
     ],
 )
 def test_malformed_files_are_one_config_error(tmp_path, name, text, needle):
     with pytest.raises(ConfigError, match=needle):
-        mut.amcl_overrides(write(tmp_path, name, text))
+        mut.ros_overrides(write(tmp_path, name, text))
 
 
 def test_the_scenario_takes_a_parameter_file_under_its_overrides(tmp_path):
@@ -134,6 +176,11 @@ REAL = Path(__file__).resolve().parents[3] / "shared" / "real_ros" / "params"
         "nav2_humble/nav2_params.yaml",
         "turtlebot3_humble/waffle.yaml",
         "turtlebot3_main/waffle.yaml",
+        "turtlebot3_noetic/costmap_common_params_waffle.yaml",
+        "turtlebot3_noetic/dwa_local_planner_params_waffle.yaml",
+        "turtlebot3_noetic/local_costmap_params.yaml",
+        "turtlebot3_noetic/global_costmap_params.yaml",
+        "turtlebot3_noetic/move_base_params.yaml",
         "ros1_navigation/amcl_diff.launch",
         "ros1_navigation/amcl_omni.launch",
         "turtlebot3_noetic/amcl.launch",
@@ -145,3 +192,5 @@ def test_real_parameter_files_load_into_the_scenario(name):
         pytest.skip(f"no {path} (third-party files beside the checkout, not in the repository)")
     scenario = load_navigation_scenario(default_scenario_file(), [f"params={path}"])
     assert scenario.amcl.min_particles >= 1
+    if name.endswith("move_base_params.yaml"):  # move_base's own key, at the top level
+        assert "navigator.controller.controller_frequency=10.0" in mut.ros_overrides(path)
