@@ -26,8 +26,12 @@ What is mapped (to the scenario's keys, ``--set``'s names):
   ``use_dijkstra``, inverted), ``allow_unknown``, ``neutral_cost``, ``cost_factor``,
   ``lethal_cost``.
 
-Every other key (frames, topics, rates, ``footprint`` polygons, other plugins) is listed in one
-warning line as ignored. Values are checked by the scenario's own checks, so a malformed one is
+* ``footprint`` polygons -> ``navigator.costmap.footprint``, with ``robot_radius`` its inscribed
+  radius (nav2 ignores ``robot_radius`` when a footprint is set): the costmap inflates around
+  that radius and the local planner checks the polygon at every pose it tries.
+
+Every other key (frames, topics, rates, other plugins) is listed in one warning line as
+ignored. Values are checked by the scenario's own checks, so a malformed one is
 one ``ConfigError`` naming the file and the (scenario's) key.
 """
 
@@ -40,8 +44,11 @@ import xml.etree.ElementTree as ET
 from dataclasses import fields
 from pathlib import Path
 
+import yaml
+
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.navigation.costmap import footprint_radii
 from drake_sim.systems.estimation.amcl_config import AmclConfig
 
 _log = logging.getLogger(__name__)
@@ -158,10 +165,17 @@ def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
     node's parameters (nav2: ``node`` its names; ROS 1: empty, namespaces in the keys)."""
     mapped, ignored = {}, []
     for path, value in _flat(params):
+        if path[-1] == "footprint" and not set(path[:-1]) - {"local_costmap", "global_costmap"}:
+            footprint = _footprint(value, where)
+            if footprint:  # nav2's "[]" is none: robot_radius then
+                inscribed = footprint_radii(footprint)[0]
+                mapped["costmap.footprint"] = footprint
+                mapped["costmap.robot_radius"] = inscribed
+            continue
         target = _target((*node, *path), params)
         if target is None:
             ignored.append(".".join(path))
-        else:
+        elif not (target[1] == "robot_radius" and "costmap.footprint" in mapped):
             section, key = target
             if key == "use_dijkstra":
                 key, value = "use_astar", not value
@@ -193,6 +207,22 @@ def _target(path: tuple, params: dict) -> tuple[str, str] | None:
             return None  # a global costmap's size is the map's here
         return "costmap", _COSTMAP[key]
     return None
+
+
+def _footprint(value, where: str) -> list[list[float]]:
+    """A footprint as nav2 (a string, ``"[[x, y], ...]"``) or ROS 1 (a list) writes it."""
+    if isinstance(value, str):
+        try:
+            value = yaml.safe_load(value)
+        except yaml.YAMLError:
+            value = None
+    ok = isinstance(value, list) and all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(v, int | float) for v in p)
+        for p in value
+    )
+    if not ok:
+        raise ConfigError(f"{where}: 'footprint' must be a list of [x, y] points, got {value!r}")
+    return [[float(v) for v in p] for p in value]
 
 
 def _flat(params: dict, prefix: tuple = ()) -> list[tuple[tuple, object]]:

@@ -55,6 +55,11 @@ class CostmapConfig:
     raytrace_max_range: float = 3.0  # m, beams clear the cells they cross up to this range.
     local_width: float = 3.0  # m, the rolling local window's extent along the map's x.
     local_height: float = 3.0  # m, its extent along the map's y.
+    # The robot's outline in its base frame, [[x, y], ...] m (a polygon, costmap_2d's
+    # ``footprint``); empty for the circle of robot_radius. With one, robot_radius is the
+    # polygon's inscribed radius (``footprint_radii``: ``--params`` sets both) and the local
+    # planner checks the outline against obstacles at every pose of its rollouts.
+    footprint: list[list[float]] = dc.field(default_factory=list)
 
 
 def check_costmap_config(config: CostmapConfig, where: str = "costmap", prefix: str = "") -> None:
@@ -71,6 +76,9 @@ def check_costmap_config(config: CostmapConfig, where: str = "costmap", prefix: 
 
     for field in dc.fields(config):
         value = getattr(config, field.name)
+        if field.name == "footprint":
+            _check_footprint(value, fail)
+            continue
         if field.name == "track_unknown_space":
             if not isinstance(value, bool):
                 fail(field.name, "true or false")
@@ -92,6 +100,54 @@ def check_costmap_config(config: CostmapConfig, where: str = "costmap", prefix: 
         fail("unknown_cost_value", "in [0, 255]")
     if not 0 <= config.obstacle_min_range < config.obstacle_max_range:
         fail("obstacle_min_range", "in [0, obstacle_max_range)")
+
+
+def _check_footprint(footprint, fail) -> None:
+    if not footprint:
+        return
+    ok = len(footprint) >= 3 and all(
+        isinstance(p, list | tuple) and len(p) == 2 and all(math.isfinite(float(v)) for v in p)
+        for p in footprint
+    )
+    if not ok:
+        fail("footprint", "a polygon of 3 or more [x, y] points (m)")
+    if footprint_radii(footprint)[0] <= 0:
+        fail("footprint", "a polygon around the robot's origin")
+
+
+def footprint_radii(footprint) -> tuple[float, float]:
+    """(inscribed, circumscribed) radius of a footprint polygon about the robot's origin, m:
+    the distance to its nearest edge (0 when the origin is outside it) and to its farthest
+    corner."""
+    points = np.asarray(footprint, dtype=float)
+    a, b = points, np.roll(points, -1, axis=0)
+    ab = b - a
+    t = np.clip(
+        np.einsum("ij,ij->i", -a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18), 0, 1
+    )
+    nearest = a + t[:, None] * ab
+    inside = _inside_polygon(points, np.zeros(2))
+    inscribed = float(np.min(np.hypot(*nearest.T))) if inside else 0.0
+    return inscribed, float(np.max(np.hypot(*points.T)))
+
+
+def _inside_polygon(points: np.ndarray, p: np.ndarray) -> bool:
+    x, y = points[:, 0] - p[0], points[:, 1] - p[1]
+    x2, y2 = np.roll(x, -1), np.roll(y, -1)
+    crosses = (y > 0) != (y2 > 0)
+    at = x + (0 - y) * (x2 - x) / np.where(y2 - y == 0, 1e-18, y2 - y)
+    return bool(np.sum(crosses & (at > 0)) % 2 == 1)
+
+
+def footprint_outline(footprint, spacing: float) -> np.ndarray:
+    """Points (k, 2) along a footprint polygon's edges, at most ``spacing`` m apart, corners
+    included, in the robot's base frame."""
+    points = np.asarray(footprint, dtype=float)
+    out = []
+    for a, b in zip(points, np.roll(points, -1, axis=0), strict=True):
+        n = max(1, math.ceil(math.hypot(*(b - a)) / spacing))
+        out.append(a + np.outer(np.arange(n) / n, b - a))
+    return np.vstack(out)
 
 
 def inflate(lethal_mask: np.ndarray, resolution: float, config: CostmapConfig) -> np.ndarray:

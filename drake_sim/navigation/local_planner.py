@@ -51,7 +51,7 @@ import numpy as np
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.planar import wrap_angle
-from drake_sim.navigation.costmap import INSCRIBED, LETHAL
+from drake_sim.navigation.costmap import INSCRIBED, LETHAL, footprint_outline
 
 STATUSES = ("following", "rotating_to_goal", "arrived", "no_valid_trajectory")
 
@@ -206,7 +206,7 @@ class DwaPlanner:
         if distance <= xy_target or (
             distance <= c.xy_goal_tolerance and abs(bearing) > math.pi / 3
         ):
-            return self._rotate_to_goal(pose, v0, w0, goal[2])
+            return self._rotate_to_goal(pose, v0, w0, goal[2], costmap)
         if distance <= c.approach_distance:
             command = self._approach(pose, v0, w0, distance, bearing, costmap)
             if command is not None:
@@ -222,7 +222,7 @@ class DwaPlanner:
         local = path[nearest : last + 1]
         heading = float(wrap_angle(math.atan2(carrot[1] - pose[1], carrot[0] - pose[0]) - pose[2]))
         if abs(heading) > c.rotate_to_heading_angle:
-            return self._turn(pose, v0, w0, heading, "following")
+            return self._turn(pose, v0, w0, heading, "following", costmap)
         return self._sample(pose, v0, w0, local, carrot, costmap)
 
     def _limit(self, v0, w0, v, omega) -> tuple[float, float]:
@@ -238,7 +238,7 @@ class DwaPlanner:
         steps = max(1, round(self.config.sim_time * self.config.controller_frequency))
         return np.vstack([pose, rollouts(pose, [v], [omega], self.period, steps)[0]])
 
-    def _turn(self, pose, v0, w0, error: float, status: str) -> LocalCommand:
+    def _turn(self, pose, v0, w0, error: float, status: str, costmap=None) -> LocalCommand:
         """Turns on the spot by ``error`` rad: proportional, at least ``min_vel_theta``, and
         slow enough to stop at the target with the angular acceleration limit (still moving
         while ``v0`` decelerates to 0 within the linear acceleration limit)."""
@@ -250,14 +250,17 @@ class DwaPlanner:
         )
         speed = max(speed, c.min_vel_theta)
         v, omega = self._limit(v0, w0, 0.0, math.copysign(speed, error))
-        return LocalCommand(v, omega, self._trajectory(pose, v, omega), status)
+        trajectory = self._trajectory(pose, v, omega)
+        if costmap is not None and not _outline_clear(trajectory[None, 1:], costmap)[0]:
+            return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
+        return LocalCommand(v, omega, trajectory, status)
 
-    def _rotate_to_goal(self, pose, v0, w0, goal_yaw: float) -> LocalCommand:
+    def _rotate_to_goal(self, pose, v0, w0, goal_yaw: float, costmap=None) -> LocalCommand:
         c = self.config
         error = float(wrap_angle(goal_yaw - pose[2]))
         if abs(error) <= c.goal_precision * c.yaw_goal_tolerance:
             return LocalCommand(0.0, 0.0, pose[None, :].copy(), "arrived")
-        return self._turn(pose, v0, w0, error, "rotating_to_goal")
+        return self._turn(pose, v0, w0, error, "rotating_to_goal", costmap)
 
     def _passable(self, costs, xy, pose, costmap) -> np.ndarray:
         """Which of the cells at ``xy`` (..., 2), of ``costs``, the robot's centre may cross
@@ -279,10 +282,13 @@ class DwaPlanner:
         )
         if not np.all(self._passable(costmap.cost_at(line), line, pose, costmap)):
             return None
+        ahead = np.column_stack([line, np.full(len(line), pose[2])])
+        if not _outline_clear(ahead[None], costmap)[0]:
+            return None
         backwards = abs(bearing) > math.pi / 2 and distance <= 3 * c.xy_goal_tolerance
         error = float(wrap_angle(bearing - math.pi)) if backwards else bearing
         if abs(error) > c.rotate_to_heading_angle:
-            return self._turn(pose, v0, w0, error, "following")
+            return self._turn(pose, v0, w0, error, "following", costmap)
         speed = max(c.min_approach_vel, c.approach_gain * distance) * math.cos(error)
         speed = -min(speed, -c.min_vel_x) if backwards else min(speed, c.max_vel_x)
         v, omega = self._limit(v0, w0, speed, c.heading_gain * error)
@@ -303,6 +309,7 @@ class DwaPlanner:
         cost = costmap.cost_at(poses[..., :2]).astype(float)
         valid = np.all(self._passable(cost, poses[..., :2], pose, costmap), axis=1)
         valid &= cost[:, -1] < INSCRIBED  # an escape must get out
+        valid &= _outline_clear(poses, costmap)
         if not np.any(valid):
             return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
         poses, cost, vs, ws = poses[valid], cost[valid], vs[valid], ws[valid]
@@ -320,6 +327,21 @@ class DwaPlanner:
         best = int(np.argmin(score))
         trajectory = np.vstack([pose, poses[best]])
         return LocalCommand(float(vs[best]), float(ws[best]), trajectory, "following")
+
+
+def _outline_clear(poses: np.ndarray, costmap) -> np.ndarray:
+    """For each rollout of ``poses`` (m, steps, 3): True when the costmap's footprint polygon
+    (``CostmapConfig.footprint``; none: the circle, checked by the centre's cost) touches no
+    LETHAL cell at any of its poses, as DWB's footprint check does."""
+    footprint = costmap.config.footprint
+    if not footprint:
+        return np.ones(len(poses), dtype=bool)
+    outline = footprint_outline(footprint, 0.5 * costmap.resolution)  # (k, 2)
+    c, s = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
+    x = poses[..., 0][..., None] + c * outline[:, 0] - s * outline[:, 1]
+    y = poses[..., 1][..., None] + s * outline[:, 0] + c * outline[:, 1]
+    costs = costmap.cost_at(np.stack([x, y], axis=-1))
+    return np.all(costs < LETHAL, axis=(1, 2))
 
 
 def _distance_to(points: np.ndarray, path: np.ndarray) -> np.ndarray:

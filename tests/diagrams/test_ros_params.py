@@ -31,6 +31,7 @@ local_costmap:
   local_costmap:
     ros__parameters:
       width: 4
+      resolution: 0.05
       robot_radius: 0.2
       footprint: "[[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]"
       inflation_layer: {inflation_radius: 0.6, cost_scaling_factor: 4.0}
@@ -87,7 +88,8 @@ def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
         "navigator.controller.xy_goal_tolerance": "0.08",
         "navigator.controller.max_vel_x": "0.26",
         "navigator.costmap.local_width": "4",
-        "navigator.costmap.robot_radius": "0.2",
+        "navigator.costmap.footprint": "[[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]]",
+        "navigator.costmap.robot_radius": "0.1",  # the footprint's inscribed radius
         "navigator.costmap.inflation_radius": "0.6",
         "navigator.costmap.cost_scaling_factor": "4.0",
         "navigator.costmap.obstacle_max_range": "2.0",
@@ -98,7 +100,7 @@ def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
     (record,) = caplog.records
     message = record.getMessage()
     assert message.startswith(f"{path}: ignored keys ")
-    for key in ("amcl.tf_broadcast", "amcl.initial_pose.z", "local_costmap.footprint"):
+    for key in ("amcl.tf_broadcast", "amcl.initial_pose.z", "local_costmap.resolution"):
         assert key in message
     assert "general_goal_checker.stateful" in message and "max_vel_x" not in message
 
@@ -146,6 +148,7 @@ def test_ros1_yaml_and_launch_files(tmp_path):
         ("a.launch", "<launch><node pkg='amcl'>", "malformed launch XML"),
         ("a.launch", LAUNCH.replace('default="40"', ""), r"\$\(arg beams\) has no value"),
         ("a.yaml", NAV2.replace("OmniMotionModel", "Tricycle"), "robot_model_type"),
+        ("a.yaml", NAV2.replace("[-0.1, -0.1], ", "[-0.1], "), "'footprint' must be a list"),
     ],
 )
 def test_malformed_files_are_one_config_error(tmp_path, name, text, needle):

@@ -172,3 +172,48 @@ def test_bad_config_values_are_rejected(key, value):
         mut.check_dwa_config(mut.DwaConfig(**{key: value}), "nav.yaml: controller")
     with pytest.raises(ConfigError, match="nav.yaml"):
         mut.check_dwa_config(mut.DwaConfig(**{key: value}), "nav.yaml: controller")
+
+
+LONG = [[-0.5, -0.1], [-0.5, 0.1], [0.1, 0.1], [0.1, -0.1]]  # 0.6 m long behind the centre
+
+
+def _with_footprint(costmap, footprint=LONG):
+    import dataclasses as dc
+
+    inscribed = cm.footprint_radii(footprint)[0]
+    config = dc.replace(costmap.config, footprint=footprint, robot_radius=inscribed)
+    return cm.Costmap(costmap.static_layer, costmap.resolution, costmap.origin, config)
+
+
+def test_a_footprint_polygon_is_checked_at_every_pose():
+    """A long robot next to a wall: its centre may go where its circle would, but a turn that
+    swings its tail through the wall is refused, and so is every rollout whose outline would
+    touch it."""
+    room = _room(boxes=[(1.45, 0.0, 1.5, 4.0)])  # a wall at x = 1.45 .. 1.5
+    long = _with_footprint(room)
+    pose = np.array([1.2, 2.0, math.pi / 2])  # facing +y, the tail 0.5 m behind, x 1.1 .. 1.3
+    dut = mut.DwaPlanner(mut.DwaConfig())
+    # Turning to face -x swings the tail (0.5 m) to x = 1.7: through the wall.
+    path = np.array([[1.2, 2.0], [0.2, 2.0]])
+    assert dut.compute(pose, (0.0, 0.0), path, [0.2, 2.0, 0.0], room).status == "following"
+    blocked = dut.compute(pose, (0.0, 0.0), path, [0.2, 2.0, 0.0], long)
+    assert blocked.status == "no_valid_trajectory"
+    # Driving on along the wall stays clear: every pose's outline is off the wall.
+    path = np.array([[1.2, 2.0], [1.2, 3.5]])
+    command = dut.compute(pose, (0.1, 0.0), path, [1.2, 3.5, math.pi / 2], long)
+    assert command.status == "following" and command.v > 0
+    outline = cm.footprint_outline(LONG, 0.01)
+    for x, y, yaw in command.trajectory:
+        c, s = math.cos(yaw), math.sin(yaw)
+        points = np.column_stack([x + c * outline[:, 0] - s * outline[:, 1],
+                                  y + s * outline[:, 0] + c * outline[:, 1]])  # fmt: skip
+        assert np.all(long.cost_at(points) < cm.LETHAL)
+
+
+def test_footprint_radii_and_checks():
+    assert cm.footprint_radii(LONG) == pytest.approx((0.1, math.hypot(0.5, 0.1)))
+    assert len(cm.footprint_outline(LONG, 0.05)) == 2 * (12 + 4)
+    with pytest.raises(ConfigError, match="a polygon around the robot's origin"):
+        cm.check_costmap_config(cm.CostmapConfig(footprint=[[1, 1], [2, 1], [2, 2]]))
+    with pytest.raises(ConfigError, match="a polygon of 3 or more"):
+        cm.check_costmap_config(cm.CostmapConfig(footprint=[[1, 1], [2, 1]]))
