@@ -27,7 +27,12 @@ from pathlib import Path
 import yaml
 from pydrake.common.yaml import yaml_dump_typed
 
-from diagrams.arm_station import MODES, ArmStationConfig, station_layout, validate_station_config
+from diagrams.arm_station_config import (
+    MODES,
+    ArmStationConfig,
+    station_layout,
+    validate_station_config,
+)
 from drake_sim.base.config import apply_overrides, check_tree, load_typed, parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir

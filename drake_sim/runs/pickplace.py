@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from diagrams.arm_station import MODES, ArmStationConfig
+from diagrams.arm_station_config import MODES, ArmStationConfig
 from diagrams.pickplace_scenario import (
     PickPlaceScenario,
     check_scenario,
