@@ -48,9 +48,10 @@ class NavigationScenario:
     world: str = ""
     # The robot's start in the map's world: [x, y, yaw] in m, m, degrees (an arena keeps its own).
     start: list[float] = dc.field(default_factory=list)
-    # A ROS parameter file (nav2_params.yaml, a ROS 1 amcl YAML or launch file) whose AMCL keys
-    # replace amcl's (diagrams.ros_params); "" for none. A relative path is from config/.
-    params: str = ""
+    # ROS parameter files (nav2_params.yaml; ROS 1 parameter YAML or launch files), read in
+    # order: their keys with a meaning here replace the scenario's (diagrams.ros_params).
+    # Relative paths are from config/.
+    params: list[str] = dc.field(default_factory=list)
     # Obstacles added to the world after mapping (arena obstacle entries): the robot's
     # obstacle layer sees them, its map does not.
     extra_obstacles: list[ExtraObstacle] = dc.field(default_factory=list)
@@ -108,7 +109,7 @@ def default_scenario_file() -> Path:
 
 def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
     """The scenario at ``path`` with ``overrides`` (``KEY=VALUE`` or ``(label, KEY=VALUE)``)
-    applied, its ``params`` file's AMCL keys under them (the file's values first, the
+    applied, its ``params`` files' keys under them (the files' values first, in order, the
     overrides' on top: a ``--set amcl.x=...`` still wins), checked.
 
     Raises:
@@ -123,10 +124,12 @@ def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
         scenario = apply_overrides(NavigationScenario, scenario, overrides)
     if not scenario.params:
         return check_navigation_scenario(scenario, "--set")
-    params = config_path(scenario.params)
-    where = str(params)
-    labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in ros_overrides(params)]
-    base = check_navigation_scenario(apply_overrides(NavigationScenario, base, labelled), where)
+    for name in scenario.params:
+        params = config_path(name)
+        where = str(params)
+        labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in ros_overrides(params)]
+        base = apply_overrides(NavigationScenario, base, labelled)
+        base = check_navigation_scenario(base, where)
     if overrides:
         base = apply_overrides(NavigationScenario, base, overrides)
     return check_navigation_scenario(base, "--set")

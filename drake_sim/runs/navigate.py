@@ -229,11 +229,15 @@ RECIPE = AppRecipe(
         ARENA_FLAG,
         WORLD_FLAG,
         START_FLAG,
-        recipe.file_flag(
+        Flag(
             "--params",
-            "parameter file",
-            "nav2_params.yaml, ROS 1 amcl YAML or launch file: its AMCL keys",
             key="params",
+            kwargs={
+                "nargs": "+",
+                "type": cli.input_file("parameter file"),
+                "metavar": "FILE",
+                "help": "ROS parameter files (nav2_params.yaml; ROS 1 YAML or launch), in order",
+            },
         ),
         LIDAR_FLAG,
         _pose_flag("--goal", "one goal: x, y (m), yaw (degrees)", "goals"),

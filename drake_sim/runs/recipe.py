@@ -65,9 +65,10 @@ class Flag:
     """One of an app's own command-line flags (``argparse`` keywords in ``kwargs``).
 
     A flag with a ``key`` sets that scenario key (``--mode both`` is ``--set mode=both``; a
-    file argument, a ``Path``, is made absolute first); a ``loader`` flag is a keyword of the
-    scenario file's loader (``--scene FILE``: a file that replaces a section); any other is an
-    option the app's run reads. Flags that share a ``group`` exclude each other.
+    file argument, a ``Path`` or a list of them, is made absolute first); a ``loader`` flag is
+    a keyword of the scenario file's loader (``--scene FILE``: a file that replaces a
+    section); any other is an option the app's run reads. Flags that share a ``group``
+    exclude each other.
     """
 
     name: str
@@ -87,6 +88,8 @@ class Flag:
         label = f"{self.name} {value}"
         if isinstance(value, Path):
             value = str(value.absolute())
+        elif isinstance(value, list):  # nargs: files made absolute one by one
+            value = [str(v.absolute()) if isinstance(v, Path) else v for v in value]
         return label, f"{self.key}={json.dumps(value)}"
 
 

@@ -158,15 +158,23 @@ def test_malformed_files_are_one_config_error(tmp_path, name, text, needle):
 
 def test_the_scenario_takes_a_parameter_file_under_its_overrides(tmp_path):
     path = write(tmp_path, "nav2_params.yaml", NAV2)
-    scenario = load_navigation_scenario(default_scenario_file(), [f"params={path}"])
+    scenario = load_navigation_scenario(default_scenario_file(), [f"params=[{path}]"])
     assert scenario.amcl.odom_alpha1 == 0.3 and scenario.amcl.odom_model_type == "omni-corrected"
     assert scenario.amcl.laser_max_beams == 45
     # A --set of the same key wins over the file, in any order.
-    sets = ["amcl.laser_max_beams=90", f"params={path}"]
+    sets = ["amcl.laser_max_beams=90", f"params=[{path}]"]
     assert load_navigation_scenario(default_scenario_file(), sets).amcl.laser_max_beams == 90
     bad = write(tmp_path, "bad.yaml", NAV2.replace("alpha1: 0.3", "alpha1: -1.0"))
     with pytest.raises(ConfigError, match=f"{bad}: 'amcl.odom_alpha1' must be non-negative"):
-        load_navigation_scenario(default_scenario_file(), [f"params={bad}"])
+        load_navigation_scenario(default_scenario_file(), [f"params=[{bad}]"])
+
+
+def test_several_files_apply_in_order(tmp_path):
+    first = write(tmp_path, "costmap.yaml", "inflation_radius: 0.9\nrobot_radius: 0.2\n")
+    second = write(tmp_path, "more.yaml", "inflation_radius: 0.7\n")
+    sets = [f"params=[{first}, {second}]"]
+    costmap = load_navigation_scenario(default_scenario_file(), sets).navigator.costmap
+    assert (costmap.inflation_radius, costmap.robot_radius) == (0.7, 0.2)
 
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "real_ros" / "params"
@@ -193,7 +201,7 @@ def test_real_parameter_files_load_into_the_scenario(name):
     path = REAL / name
     if not path.is_file():
         pytest.skip(f"no {path} (third-party files beside the checkout, not in the repository)")
-    scenario = load_navigation_scenario(default_scenario_file(), [f"params={path}"])
+    scenario = load_navigation_scenario(default_scenario_file(), [f"params=[{path}]"])
     assert scenario.amcl.min_particles >= 1
     if name.endswith("move_base_params.yaml"):  # move_base's own key, at the top level
         assert "navigator.controller.controller_frequency=10.0" in mut.ros_overrides(path)
