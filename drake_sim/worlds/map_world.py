@@ -22,6 +22,7 @@ merged once.
 from __future__ import annotations
 
 import hashlib
+import io
 import math
 
 import numpy as np
@@ -88,8 +89,6 @@ def cached_rectangles(occupancy_map: OccupancyMap, occupied: int = OCCUPIED_PERC
 
 
 def _npy_bytes(array: np.ndarray) -> bytes:
-    import io
-
     buffer = io.BytesIO()
     np.save(buffer, array)
     return buffer.getvalue()
