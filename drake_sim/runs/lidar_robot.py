@@ -7,7 +7,7 @@ from pathlib import Path
 from diagrams.mapping_scenario import config_path
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.map_files import load_map
+from drake_sim.base.map_files import OccupancyMap, load_map
 from drake_sim.robots.turtlebot3 import default_turtlebot3_file
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params, load_turtlebot3_params, validate
 from drake_sim.runs.recipe import Flag, InputFile, file_flag
@@ -55,10 +55,11 @@ START_FLAG = Flag(
 """``--start X Y YAW``: the scenario's ``start``, where the robot starts in a ``world``."""
 
 
-def load_world(scenario) -> tuple[Path, Arena]:
-    """The world a mapping or navigation scenario's robot drives in, and its file: the map its
-    ``world`` names (occupied cells walls) with the robot at its ``start`` ([x, y, yaw_deg],
-    required there), else its ``arena`` (which keeps its own start).
+def load_world(scenario) -> tuple[Path, Arena, OccupancyMap | None]:
+    """The world a mapping or navigation scenario's robot drives in, its file and the map it
+    was made from: the map its ``world`` names (occupied cells walls) with the robot at its
+    ``start`` ([x, y, yaw_deg], required there), else its ``arena`` (which keeps its own start;
+    no map).
 
     Raises:
         ConfigError: a start without a world or a world without a start, a bad map, or a start
@@ -72,7 +73,7 @@ def load_world(scenario) -> tuple[Path, Arena]:
                 "its own start"
             )
         arena_file = config_path(scenario.arena)
-        return arena_file, load_arena(arena_file)
+        return arena_file, load_arena(arena_file), None
     world_file = config_path(scenario.world)
     if start is None:
         raise ConfigError(f"--world {world_file}: give the robot's start with --start X Y YAW")
@@ -80,4 +81,6 @@ def load_world(scenario) -> tuple[Path, Arena]:
         raise ConfigError(f"start must be [x, y, yaw], got {len(start)} values")
     x, y, yaw = (float(v) for v in start)
     where = f"--world {world_file}"
-    return Path(world_file), map_arena(load_map(world_file), (x, y, math.radians(yaw)), where=where)
+    world_map = load_map(world_file)
+    arena = map_arena(world_map, (x, y, math.radians(yaw)), where=where)
+    return Path(world_file), arena, world_map

@@ -25,7 +25,7 @@ from diagrams.mapping_scenario import (
 )
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
-from drake_sim.base.map_files import OccupancyMap, load_map, save_map
+from drake_sim.base.map_files import OccupancyMap, save_map
 from drake_sim.base.planar import wrap_angle
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
@@ -271,10 +271,9 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
     ``maps/<arena>``), ``record`` (keep the map's drawings in the recording)."""
     scenario = inputs.scenario
     teleop = bool(recipe.option(options, "teleop", False))
-    world_file = scenario.world and config_path(scenario.world)
-    arena_file, arena = load_world(scenario)
-    if world_file and not teleop and not scenario.route:
-        raise ConfigError(f"--world {world_file}: a map's world has no default route; give --route")
+    arena_file, arena, world_map = load_world(scenario)
+    if world_map is not None and not teleop and not scenario.route:
+        raise ConfigError(f"--world {arena_file}: a map's world has no default route; give --route")
     waypoints = [] if teleop else load_route(route_file(scenario, arena_file), arena).waypoints
     return MappingRun(
         scenario,
@@ -287,7 +286,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
         keyframes=recipe.option(options, "record", None) is not None,
         out=recipe.option(options, "out", None),
         arena_file=arena_file,
-        world_map=load_map(world_file) if world_file else None,
+        world_map=world_map,
     )
 
 

@@ -167,8 +167,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
     map_file = recipe.option(options, "map")
-    world_file = scenario.world
-    arena_file, arena = load_world(scenario)
+    arena_file, arena, world_map = load_world(scenario)
     if map_file:
         occupancy_map = load_map(map_file)
     else:
@@ -183,7 +182,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     )
     goals = _goals(options, arena, arena_file, occupancy_map, interactive, inputs.seed)
     start = np.array(arena.start_pose())
-    if map_file and not world_file:  # a map and an arena: do they describe the same place?
+    if map_file and world_map is None:  # a map and an arena: do they describe the same place?
         poses = [start[:2], *(np.asarray(g, dtype=float)[:2] for g in goals)]
         check_map_agrees(arena, occupancy_map, poses, f"--map {map_file}, arena {arena_file}")
     global_localization = bool(recipe.option(options, "global_localization", False))

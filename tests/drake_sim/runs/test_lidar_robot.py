@@ -38,10 +38,12 @@ def test_a_scenario_names_a_world_and_a_start(tmp_path):
     """``world`` and ``start`` keys: what ``--world`` and ``--start`` set."""
     _, room_map = nh.saved_truth_map("room", tmp_path)
     scenario = NavigationScenario(world=str(room_map), start=[-2.2, -1.8, 90.0])
-    path, arena = mut.load_world(scenario)
+    path, arena, world_map = mut.load_world(scenario)
+    assert world_map.resolution == pytest.approx(0.05)
     assert path == room_map and arena.start_pose()[2] == pytest.approx(math.pi / 2)
     assert len(arena.obstacles) > 4
     with pytest.raises(ConfigError, match="give the robot's start"):
         mut.load_world(NavigationScenario(world=str(room_map)))
-    path, arena = mut.load_world(NavigationScenario())  # the arena, its own start
+    path, arena, world_map = mut.load_world(NavigationScenario())  # the arena, its own start
+    assert world_map is None
     assert path.name == "room.yaml" and arena.start.x == -2.2

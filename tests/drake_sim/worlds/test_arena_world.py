@@ -60,6 +60,26 @@ def test_the_arena_is_static_with_a_link_per_wall_and_obstacle(tmp_path):
     assert (friction.static_friction(), friction.dynamic_friction()) == mut.GROUND_FRICTION
 
 
+def _assert_grid_agrees(query, grid, cells=None) -> int:
+    """At each cell (row, col) of ``cells`` (every known cell when None), at the scan height,
+    SceneGraph's signed distance is negative exactly where ``grid`` is occupied (a centre
+    exactly on a face is skipped: the grid counts it inside by convention). Returns the number
+    of occupied cells checked."""
+    xs, ys = (np.asarray(v) for v in grid.centres())
+    if cells is None:
+        cells = zip(*np.nonzero(grid.cells >= 0), strict=True)
+    occupied = 0
+    for r, c in cells:
+        p = np.array([xs[r, c], ys[r, c], SCAN_HEIGHT])
+        distances = [d.distance for d in query.ComputeSignedDistanceToPoint(p, 1e-5)]
+        if distances and abs(min(distances)) < 1e-6:
+            continue
+        inside = bool(distances) and min(distances) < 0
+        assert inside == (grid.cells[r, c] == 100), (grid.resolution, p)
+        occupied += inside
+    return occupied
+
+
 def test_collision_geometry_agrees_with_the_grid_at_every_cell(tmp_path):
     """SceneGraph's signed distance at every cell centre, at the scan height, is negative
     exactly where the grid (restricted to geometry at least that tall) is occupied."""
@@ -67,16 +87,7 @@ def test_collision_geometry_agrees_with_the_grid_at_every_cell(tmp_path):
     _, _, query = _plant_with(arena)
     for resolution in (0.05, 0.1):
         grid = arena_grid(arena, resolution, height=SCAN_HEIGHT)
-        xs, ys = (np.asarray(v) for v in grid.centres())
-        occupied = 0
-        for r, c in zip(*np.nonzero(grid.cells >= 0), strict=True):
-            p = np.array([xs[r, c], ys[r, c], SCAN_HEIGHT])
-            distances = [d.distance for d in query.ComputeSignedDistanceToPoint(p, 1e-5)]
-            if distances and abs(min(distances)) < 1e-6:
-                continue  # exactly on a face: the grid counts it inside by convention
-            inside = bool(distances) and min(distances) < 0
-            assert inside == (grid.cells[r, c] == 100), (resolution, p)
-            occupied += inside
+        occupied = _assert_grid_agrees(query, grid)
         assert occupied > 0.05 * np.sum(grid.cells >= 0)
         # The low box is in the plant but below the scan plane, so neither sees it there.
         r, c = grid.cell_of(np.array([-0.8, 0.6]))
@@ -89,16 +100,10 @@ def test_every_shipped_arena_agrees_with_its_grid(path):
     arena = load_arena(path)
     _, _, query = _plant_with(arena)
     grid = arena_grid(arena, 0.1, height=SCAN_HEIGHT)
-    xs, ys = (np.asarray(v) for v in grid.centres())
     rows, cols = np.nonzero(grid.cells >= 0)
     rng = np.random.default_rng(7)
-    for k in rng.choice(len(rows), size=min(1500, len(rows)), replace=False):
-        p = np.array([xs[rows[k], cols[k]], ys[rows[k], cols[k]], SCAN_HEIGHT])
-        distances = [d.distance for d in query.ComputeSignedDistanceToPoint(p, 1e-5)]
-        if distances and abs(min(distances)) < 1e-6:
-            continue
-        inside = bool(distances) and min(distances) < 0
-        assert inside == (grid.cells[rows[k], cols[k]] == 100), p
+    picked = rng.choice(len(rows), size=min(1500, len(rows)), replace=False)
+    _assert_grid_agrees(query, grid, ((rows[k], cols[k]) for k in picked))
 
 
 def test_the_ground_is_the_floor(tmp_path):
@@ -146,12 +151,4 @@ def test_a_large_arena_anchors_its_obstacles_on_the_world_body(tmp_path):
     anchored = inspector.GetGeometries(inspector.world_frame_id(), Role.kProximity)
     expected = {f.name for f in arena_footprints(arena)[4:]}
     assert {inspector.GetName(g).split("::")[-1] for g in anchored} == expected
-    grid = arena_grid(arena, 0.05, height=SCAN_HEIGHT)
-    xs, ys = (np.asarray(v) for v in grid.centres())
-    for r, c in zip(*np.nonzero(grid.cells >= 0), strict=True):
-        p = np.array([xs[r, c], ys[r, c], SCAN_HEIGHT])
-        distances = [d.distance for d in query.ComputeSignedDistanceToPoint(p, 1e-5)]
-        if distances and abs(min(distances)) < 1e-6:
-            continue  # exactly on a face: the grid counts it inside by convention
-        inside = bool(distances) and min(distances) < 0
-        assert inside == (grid.cells[r, c] == 100), p
+    _assert_grid_agrees(query, arena_grid(arena, 0.05, height=SCAN_HEIGHT))
