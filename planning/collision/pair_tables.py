@@ -59,22 +59,45 @@ class PairTable(NamedTuple):
     values: np.ndarray
 
 
+class ClearanceGrid(NamedTuple):
+    """What a pair's table is made from, the same for every sphere cover of the robot (so it
+    is computed and cached once): ``joints``, ``n``, ``wrap``, ``lo``, ``step`` as
+    ``PairTable``'s, ``slope`` (how fast the exact shapes may close per unit of each joint, m)
+    and ``clear`` (prod(n),) each cell's clearance bound in metres (its centre's, less the
+    shrink within the cell)."""
+
+    joints: np.ndarray
+    n: np.ndarray
+    wrap: np.ndarray
+    lo: np.ndarray
+    step: np.ndarray
+    slope: np.ndarray
+    clear: np.ndarray
+
+
 def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | None:
     """The table of body pair (a, b) (rows of ``h.speed``), or None when it cannot have one
     (more than two joints, no finite box, no speed bound) or would not help (no cell above 0).
 
     Args:
         d: the sphere model's ``KernelData`` (its kinematics).
-        h: its ``HullData``; ``rows`` the rows of ``h.pair`` that are this pair's shapes.
+        h: its ``HullData`` (``speed``: the shapes' own bounds, the same for every cover);
+            ``rows`` the rows of ``h.pair`` that are this pair's shapes.
         low, high: (D,) the box each joint spans (``self_pairs.domain``); ``wrap`` (D,) True
             where that is one turn of a revolute joint.
         sphere_speed: ``KernelData.speed`` (L, D), the spheres' speed bounds.
     """
+    grid = clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed)
+    return None if grid is None else table_of(grid, a, b, sphere_speed)
+
+
+def clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed) -> ClearanceGrid | None:
+    """The cells of body pair (a, b)'s table and their clearances (``pair_table``'s
+    arguments), or None when it cannot have a table."""
     found = _joints(h, a, b, low, high, sphere_speed)
     if found is None:
         return None
-    joints, slope, sphere_slope = found
-    scale = max(1.0, float(np.max(slope / sphere_slope)))
+    joints, slope, _ = found
     span = high[joints] - low[joints]
     n = np.maximum(1, np.ceil(span * slope * len(joints) / (2.0 * LOSS))).astype(np.int64)
     while np.prod(n) > MAX_CELLS:
@@ -86,10 +109,19 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
     for k, j in enumerate(joints):
         qs[:, j] = centres[k].ravel()
     clear = clearances(qs, *pack(d), *pack(h), np.asarray(rows, dtype=np.int64))
-    values = (clear - float(np.sum(slope * step / 2.0))) / scale
-    if not np.any(values > 0.0):
+    clear = clear - float(np.sum(slope * step / 2.0))
+    return ClearanceGrid(joints, n, wrap[joints], low[joints], step, slope, clear)
+
+
+def table_of(grid: ClearanceGrid, a, b, sphere_speed) -> PairTable | None:
+    """The table of body pair (a, b) for a sphere cover with speed bounds ``sphere_speed``:
+    the grid's clearances in the cover's speed units (divided by how much faster the exact
+    shapes may close); None when no cell is above 0."""
+    sphere_slope = sphere_speed[a, grid.joints] + sphere_speed[b, grid.joints]
+    scale = max(1.0, float(np.max(grid.slope / sphere_slope)))
+    if not np.any(grid.clear > 0.0):
         return None
-    return PairTable(joints, n, wrap[joints], low[joints], step, values)
+    return PairTable(grid.joints, grid.n, grid.wrap, grid.lo, grid.step, grid.clear / scale)
 
 
 def _joints(h, a, b, low, high, sphere_speed) -> tuple | None:
@@ -108,10 +140,11 @@ def _joints(h, a, b, low, high, sphere_speed) -> tuple | None:
 
 
 def table_key(d, h, rows, a, b, low, high, wrap, sphere_speed) -> str | None:
-    """What ``pair_table`` reads for body pair (a, b), as a digest (its cache key), or None when
-    the pair cannot have a table (more than two joints, no finite box, no speed bound): the
-    pair's shapes, thresholds, speeds and box, the kinematic steps from its shapes to the base
-    (not the rest: a finger's position elsewhere leaves the key as it is) and this code."""
+    """What ``clearance_grid`` reads for body pair (a, b), as a digest (its cache key), or None
+    when the pair cannot have a table (more than two joints, no finite box, no speed bound):
+    the pair's shapes, thresholds, speeds and box, the kinematic steps from its shapes to the
+    base (not the rest: a finger's position elsewhere leaves the key as it is) and this code.
+    Not the spheres' speeds: every cover of the robot shares the grid (``table_of``)."""
     if _joints(h, a, b, low, high, sphere_speed) is None:
         return None
     shapes = sorted({int(g) for g in h.pair[rows].ravel()})
@@ -124,31 +157,31 @@ def table_key(d, h, rows, a, b, low, high, wrap, sphere_speed) -> str | None:
     digest = hashlib.sha256(Path(__file__).read_bytes())
     parts = [steps, d.parent[steps], d.kind[steps], d.q_index[steps], d.terms[steps], d.arm]
     parts += [h.pair[rows], h.pair_gap[rows], low, high, wrap, h.speed[[a, b]]]
-    parts += [sphere_speed[[a, b]], h.geom_step[shapes], h.geom_radius[shapes]]
+    parts += [h.geom_step[shapes], h.geom_radius[shapes]]
     parts += [h.vert[h.vert_start[g] : h.vert_start[g + 1]] for g in shapes]
     for part in parts:
         digest.update(np.ascontiguousarray(part, dtype=float).tobytes())
     return digest.hexdigest()[:16]
 
 
-def cached_pair_table(key: str, d, h, rows, a, b, low, high, wrap, sphere_speed):
-    """``pair_table`` (a ``PairTable`` or None), read from the cache under ``key``
-    (``table_key``) when the pair was tabulated before (a table takes ~1-10 s), else made
-    and written there."""
+def cached_grid(key: str, d, h, rows, a, b, low, high, wrap, sphere_speed):
+    """``clearance_grid`` (a ``ClearanceGrid`` or None), read from the cache under ``key``
+    (``table_key``) when the pair was tabulated before (a grid takes ~1-10 s), else made and
+    written there."""
     path = cache_dir() / "pair_tables" / f"{key}.npz"
     try:
         with np.load(path) as saved:
             if not saved["some"]:
                 return None
-            return PairTable(*(saved[name] for name in PairTable._fields))
+            return ClearanceGrid(*(saved[name] for name in ClearanceGrid._fields))
     except (OSError, ValueError, KeyError):
         pass
-    table = pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed)
+    grid = clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed)
     buffer = io.BytesIO()
-    np.savez(buffer, some=table is not None, **(table._asdict() if table else {}))
+    np.savez(buffer, some=grid is not None, **(grid._asdict() if grid else {}))
     with contextlib.suppress(ConfigError):  # a cache that cannot be written: tabulated again
         write_atomic(path, buffer.getvalue(), "clearance table cache")
-    return table
+    return grid
 
 
 def kernel_fields(tables: list[PairTable | None]) -> dict:
@@ -196,28 +229,37 @@ def clearances(qs, floats, ints, hull_floats, hull_ints, rows):
     P = np.empty((4, 3))
     v = np.empty(3)
     none = np.zeros(sphere_kernel.OBJ_COLUMNS)
+    start = np.zeros((len(rows), 3))  # each pair's last separating direction (0: none)
     out = np.empty(len(qs))
     for n in range(len(qs)):
         for k in range(len(d.arm)):
             full[d.arm[k]] = qs[n, k]
         _pose_chain_lanes(full, sines, cosines, d.parent, d.kind, d.q_index, d.terms, T)
         least = np.inf
-        for r in rows:
+        for i, r in enumerate(rows):
             g, e = h.pair[r, 0], h.pair[r, 1]
-            least = min(least, _distance_bound(h, g, e, none, T, P, v) - h.pair_gap[r])
+            bound = _distance_bound(h, g, e, none, T, P, v, start[i])
+            least = min(least, bound - h.pair_gap[r])
         out[n] = least
     return out
 
 
 @njit(cache=True, _nrt=False)
-def _distance_bound(h, g, e, none, T, P, v):
+def _distance_bound(h, g, e, none, T, P, v, start):
     """A lower bound on the distance between robot shapes g and e (0 when they may touch):
-    the best of GJK's bounds v.w / |v| (``hull_kernel._apart``), run until it converges."""
-    ax, ay, az = _centre(h, g, T)
-    bx, by, bz = _centre(h, e, T)
-    vx, vy, vz = ax - bx, ay - by, az - bz
+    the best of GJK's bounds v.w / |v| (``hull_kernel._apart``), run until it converges.
+
+    GJK starts from ``start`` (3,), the direction that separated the pair at the neighbouring
+    cell (any direction gives a valid bound; a near one converges in a step or two), or from
+    the centres' difference where it is 0; the direction it ends with is left there."""
+    vx, vy, vz = start[0], start[1], start[2]
+    if vx == 0.0 and vy == 0.0 and vz == 0.0:
+        ax, ay, az = _centre(h, g, T)
+        bx, by, bz = _centre(h, e, T)
+        vx, vy, vz = ax - bx, ay - by, az - bz
     if vx == 0.0 and vy == 0.0 and vz == 0.0:
         vx = 1.0
+    start[0], start[1], start[2] = 0.0, 0.0, 0.0
     best = 0.0
     k = 0
     for _ in range(_ITERATIONS):
@@ -227,6 +269,7 @@ def _distance_bound(h, g, e, none, T, P, v):
         if vw > 0.0:
             best = max(best, vw / np.sqrt(vv))
         if k > 0 and vv - vw <= 1e-12 * vv:
+            start[0], start[1], start[2] = vx, vy, vz
             return best  # converged
         P[k, 0], P[k, 1], P[k, 2] = wx, wy, wz
         k = _closest(P, k + 1, v)

@@ -38,7 +38,13 @@ from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import cache_dir
 from planning.collision.hull_kernel import HullData, prove_free_packed
-from planning.collision.pair_tables import PairTable, cached_pair_table, table_key
+from planning.collision.pair_tables import (
+    ClearanceGrid,
+    PairTable,
+    cached_grid,
+    table_key,
+    table_of,
+)
 from planning.collision.sphere_kernel import pack
 
 MAX_JOINTS = 2  # a pair's joints: cells grow as the cells per joint to this power
@@ -80,7 +86,7 @@ class OwnPairs:
         self.lower = plant.GetPositionLowerLimits()[arm]
         self.upper = plant.GetPositionUpperLimits()[arm]
         self._never: set[frozenset] | None = None
-        self._tables: dict[str, PairTable | None] = {}  # by ``pair_tables.table_key``
+        self._grids: dict[str, ClearanceGrid | None] = {}  # by ``pair_tables.table_key``
 
     def never(self, d, h: HullData, present) -> set[frozenset]:
         """The own pairs (plant indices) proven apart at every configuration (``never_close``
@@ -106,9 +112,10 @@ class OwnPairs:
             robot = present[a] in self.bodies and present[b] in self.bodies
             args = (d, h, rows, a, b, low, high, wrap, d.speed)
             key = table_key(*args) if robot and rows else None
-            if key is not None and key not in self._tables:
-                self._tables[key] = cached_pair_table(key, *args)
-            out.append(None if key is None else self._tables[key])
+            if key is not None and key not in self._grids:
+                self._grids[key] = cached_grid(key, *args)
+            grid = None if key is None else self._grids[key]
+            out.append(None if grid is None else table_of(grid, a, b, d.speed))
         return out
 
 

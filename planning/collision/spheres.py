@@ -204,6 +204,9 @@ class SphereCollisionModel:
         speed = speed_walk(plant, columns, dict(zip(present, self._point_norm, strict=True)))
         reach = np.maximum(self._shape_reach, self._sphere_reach)
         geometry_speed = speed_walk(plant, columns, dict(zip(present, reach, strict=True)))
+        # The shapes' own bound, the same for every cover: the clearance tables use it, so
+        # the covers of one robot share their tables' costly cells (``pair_tables``).
+        shape_speed = speed_walk(plant, columns, dict(zip(present, self._shape_reach, strict=True)))
         for steps, points in _FOLDED:
             arrays[steps], arrays[points] = fold_points(offsets, arrays[steps], arrays[points])
         self._hull_data = folded_hulls(self._hull_raw, offsets, geometry_speed)
@@ -217,7 +220,8 @@ class SphereCollisionModel:
             **kernel_fields([None] * len(arrays["body_pair"])),
         )
         if self._never is not None:  # the own pairs' clearance tables (``pair_tables``)
-            tables = self._own.tables(self._kernel_robot(out), self._hull_data, self._present)
+            shapes = self._hull_data._replace(speed=shape_speed)
+            tables = self._own.tables(self._kernel_robot(out), shapes, self._present)
             out.update(kernel_fields(tables))
         return out
 

@@ -25,8 +25,9 @@ CLICK_PICK = """(() => {
 })()"""
 
 
-def read_line_matching(process, pattern: str, timeout: float) -> str:
-    """Reads the process's stdout until a line matches ``pattern`` (seconds of wall time)."""
+def read_line_matching(process, pattern: str, timeout: float, stderr) -> str:
+    """Reads the process's stdout until a line matches ``pattern`` (seconds of wall time);
+    the assertion otherwise shows the end of the process's ``stderr`` file."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         ready, _, _ = select.select([process.stdout], [], [], 1.0)
@@ -36,26 +37,40 @@ def read_line_matching(process, pattern: str, timeout: float) -> str:
                 return line
             if not line and process.poll() is not None:
                 break
-    raise AssertionError(f"no line matching {pattern!r} (exit code {process.poll()})")
+    tail = stderr.read_text()[-2000:]
+    raise AssertionError(f"no line matching {pattern!r} (exit code {process.poll()}):\n{tail}")
 
 
 @pytest.mark.browser
 def test_pick_button_in_the_live_page_runs_the_task(tmp_path):
     require_chromium()
     report = tmp_path / "report.json"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "drake_sim.pickplace", "--mode", "kinematic", "--report", report],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    # stderr to a file: a pipe nobody reads would block the app once full.
+    with (tmp_path / "stderr.txt").open("w") as stderr:
+        process = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "drake_sim.pickplace",
+                "--mode",
+                "kinematic",
+                "--report",
+                report,
+            ],
+            stdout=subprocess.PIPE,
+            stderr=stderr,
+            text=True,
+        )
     try:
-        url = re.search(r"http://\S+", read_line_matching(process, "press 'Pick'", 120)).group(0)
+        # A hang guard, not a speed limit: a first run on a cold cache, beside the rest of the
+        # suite on two cores, fits its covers and tables before the page is up.
+        line = read_line_matching(process, "press 'Pick'", 600, tmp_path / "stderr.txt")
+        url = re.search(r"http://\S+", line).group(0)
         with HeadlessBrowser(size=(640, 400), timeout=60.0) as browser:
             browser.open(url)
             browser.wait_for(f"{COUNT_MESHES} > 20", timeout=60.0)  # the Panda's links are in
             browser.wait_for(CLICK_PICK, timeout=30.0)
-            read_line_matching(process, "^success", 300)
+            read_line_matching(process, "^success", 600, tmp_path / "stderr.txt")
             picture = Image.open(io.BytesIO(browser.screenshot())).convert("RGB")
         assert_not_blank(picture)
         process.send_signal(signal.SIGINT)  # the viewer keeps running until Ctrl-C

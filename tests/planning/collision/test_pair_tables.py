@@ -81,9 +81,15 @@ def test_a_table_is_made_once_then_read_from_the_cache(elbow, monkeypatch):
     def refuse(*args):
         raise AssertionError("tabulated again")
 
-    monkeypatch.setattr(pair_tables, "pair_table", refuse)
+    monkeypatch.setattr(pair_tables, "clearance_grid", refuse)
     again = SphereCollisionModel(elbow).kernel_data().table
     np.testing.assert_array_equal(again, before)
+    # A cover with another slack has other sphere speeds, so other table values, from the
+    # same grid: the cells' clearances (the costly part) are computed once per robot.
+    other = SphereCollisionModel(elbow, slack=0.005).kernel_data()
+    assert len(other.table) == len(before)
+    scale = before[before > 0.0] / other.table[before > 0.0]
+    assert np.allclose(scale, scale[0])
 
 
 def test_a_joint_outside_the_group_changes_only_the_keys_of_pairs_it_moves(tmp_path):
