@@ -49,7 +49,8 @@ START_FLAG = Flag(
         "nargs": 3,
         "type": float,
         "metavar": ("X", "Y", "YAW"),
-        "help": "the robot's start in a --world: x, y (m), yaw (degrees)",
+        "help": "the robot's start in a world from a map (--world MAP; navigate: or --map "
+        "with no arena named): x, y (m), yaw (degrees)",
     },
 )
 """``--start X Y YAW``: the scenario's ``start``, where the robot starts in a ``world``."""

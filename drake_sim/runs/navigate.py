@@ -160,13 +160,17 @@ def _goals(options, arena, arena_file: Path, occupancy_map, interactive: bool, s
 
 def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> NavigateRun:
     """The recipe's run. ``options``: ``map`` (map_server YAML; default the arena's ground
-    truth at the lidar's height, what a perfect mapping run saves), ``goal`` ([x, y, yaw_deg]),
+    truth at the lidar's height, what a perfect mapping run saves; with a ``start`` and no
+    world named, also the world the robot drives in), ``goal`` ([x, y, yaw_deg]),
     ``goals`` (a goals file, a number of random goals, or a list of ``[x, y, yaw_rad]``),
     ``initial_pose`` (AMCL's first
     guess, [x, y, yaw_deg]; default the true start), ``global_localization``; with a viewer and
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
     map_file = recipe.option(options, "map")
+    own_world = map_file and not scenario.world and not _arena_named(options)
+    if own_world and scenario.start:  # --map and --start, no arena: the map is the world
+        scenario = dc.replace(scenario, world=str(map_file))
     arena_file, arena, world_map = load_world(scenario)
     if map_file:
         occupancy_map = load_map(map_file)
@@ -184,7 +188,17 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     start = np.array(arena.start_pose())
     if map_file and world_map is None:  # a map and an arena: do they describe the same place?
         poses = [start[:2], *(np.asarray(g, dtype=float)[:2] for g in goals)]
-        check_map_agrees(arena, occupancy_map, poses, f"--map {map_file}, arena {arena_file}")
+        try:
+            check_map_agrees(arena, occupancy_map, poses, f"--map {map_file}, arena {arena_file}")
+        except ConfigError as e:
+            if own_world:
+                hint = (
+                    "no arena named: give the robot's start with --start X Y YAW to drive in "
+                    "the map's own world, or name the arena the map was made in with --arena"
+                )
+            else:
+                hint = "to drive in the map's own world: --world MAP --start X Y YAW"
+            raise ConfigError(f"{e} ({hint})") from None
     global_localization = bool(recipe.option(options, "global_localization", False))
     estimate = None
     if recipe.option(options, "initial_pose") is not None:
@@ -205,6 +219,16 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
         realtime=realtime,
         interactive=interactive,
     )
+
+
+def _arena_named(options) -> bool:
+    """Whether the command line names the world (``--arena``, ``--world``, a scenario file of
+    the user's, ``--set arena=``/``world=``); otherwise a ``--map`` given with ``--start`` is
+    the world too."""
+    if any(recipe.option(options, name) for name in ("arena", "world", "scenario")):
+        return True
+    sets = recipe.option(options, "set") or ()
+    return any(str(item).split("=", 1)[0] in ("arena", "world") for item in sets)
 
 
 def _pose_flag(name: str, help_text: str, group: str) -> Flag:

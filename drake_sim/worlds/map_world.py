@@ -189,8 +189,7 @@ def check_map_agrees(arena: Arena, occupancy_map: OccupancyMap, poses, where: st
     if share > DISAGREE_FRACTION:
         raise ConfigError(
             f"{where}: the map and the arena do not agree: {share:.0%} of the arena's wall "
-            "cells are free in the map (simulate in the map's own world with --world MAP "
-            "--start X Y YAW)"
+            "cells are free in the map"
         )
 
 

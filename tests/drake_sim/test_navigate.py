@@ -158,17 +158,37 @@ def test_a_map_of_another_place_is_one_line_and_exit_2(tmp_path):
     _, maze_map = nh.saved_truth_map("maze", tmp_path)
     result = _run("--map", str(maze_map), "--goal", "0", "-1", "90")
     assert_bad_input(result, "the map and the arena do not agree")
+    assert "give the robot's start with --start" in result.stderr  # no arena named: the way on
+    named = _run(
+        "--map", str(maze_map), "--arena", str(nh.arena_file("room")), "--goal", "0", "-1", "90"
+    )
+    assert_bad_input(named, "the map and the arena do not agree")
+    assert "no arena named" not in named.stderr
+
+
+def test_with_no_arena_named_the_map_is_the_world(tmp_path, capsys):
+    """``--map`` and ``--start`` with no arena: the robot drives in the map's own world (the
+    maze's map, which the default room arena does not match)."""
+    _, maze_map = nh.saved_truth_map("maze", tmp_path)
+    report_file = tmp_path / "report.json"
+    args = ["--headless", "--map", str(maze_map), "--start", "-2.65", "-2.4", "90"]
+    args += ["--goal", "-2.65", "-1.4", "90", "--report", str(report_file)]
+    code = cli.run(mut.main, args)
+    assert code == 0, capsys.readouterr().err
+    report = json.loads(report_file.read_text())
+    assert report["reached_all"] and report["collisions"] == 0
 
 
 @pytest.mark.parametrize(
     "args, needle",
     [
-        (["--start", "0", "0", "0"], "--start places the robot in a world from a map"),
+        (["--arena", "ROOM", "--start", "0", "0", "0"], "--start places the robot"),
         (["--world", "MAP"], "give the robot's start with --start"),
         (["--world", "MAP", "--start", "40", "0", "0"], "outside the map"),
         (["--world", "MAP", "--start", "nan", "0", "0"], "must be finite"),
     ],
 )
 def test_bad_world_options_are_one_line_and_exit_2(room_map, args, needle):
-    args = [str(room_map) if a == "MAP" else a for a in args]
+    names = {"MAP": str(room_map), "ROOM": str(nh.arena_file("room"))}
+    args = [names.get(a, a) for a in args]
     assert_bad_input(_run("--map", str(room_map), "--goal", "0", "-1", "0", *args), needle)
