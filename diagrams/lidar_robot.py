@@ -17,11 +17,11 @@ from pydrake.systems.primitives import MatrixGain
 from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.turtlebot3 import (
-    BASE_FOOTPRINT,
-    LIDAR_FRAME,
     add_turtlebot3,
     drive_limits,
+    frame_names,
     start_pose,
+    wheel_signs,
     wheel_state_selector,
 )
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
@@ -84,22 +84,25 @@ def add_lidar_robot(
     add_arena(plant, world)
     instance = add_turtlebot3(plant, robot, name=ROBOT_NAME)
     plant.Finalize()
+    names, signs = frame_names(robot), wheel_signs(robot)
     start = np.asarray(start, dtype=float)
-    base = plant.GetBodyByName(BASE_FOOTPRINT, instance)
+    base = plant.GetFrameByName(names["base"], instance).body()
     plant.SetDefaultFloatingBaseBodyPose(base, start_pose(*start))
 
-    wheels = builder.AddNamedSystem(
-        "wheel_state", MatrixGain(wheel_state_selector(plant, instance))
-    )
+    selector = wheel_state_selector(plant, instance, (names["left"], names["right"]), signs)
+    wheels = builder.AddNamedSystem("wheel_state", MatrixGain(selector))
     builder.Connect(plant.get_state_output_port(), wheels.get_input_port())
     drive = DiffDriveConfig(rate=scenario.drive_rate, **drive_limits(robot))
     controller = builder.AddNamedSystem(
         "diff_drive", DiffDriveController(robot=robot, config=drive, upside_down_aware=False)
     )
     builder.Connect(wheels.get_output_port(), controller.GetInputPort("wheel_state"))
-    builder.Connect(
-        controller.GetOutputPort("wheel_torques"), plant.get_actuation_input_port(instance)
-    )
+    torques = controller.GetOutputPort("wheel_torques")
+    if np.any(signs < 0):  # a wheel whose joint turns backwards when the robot drives forward
+        flip = builder.AddNamedSystem("wheel_torque_signs", MatrixGain(np.diag(signs)))
+        builder.Connect(torques, flip.get_input_port())
+        torques = flip.get_output_port()
+    builder.Connect(torques, plant.get_actuation_input_port(instance))
     encoder_odometry = builder.AddNamedSystem(
         "odometry",
         EncoderOdometry(
@@ -117,7 +120,7 @@ def add_lidar_robot(
         builder,
         plant,
         scene_graph,
-        frame=plant.GetFrameByName(LIDAR_FRAME, instance),
+        frame=plant.GetFrameByName(names["lidar"], instance),
         config=scenario.lidar,
         ignore=[instance],
         seed=seed,

@@ -3,10 +3,9 @@ description may take, and VAMP's four robots from wherever they can be had.
 
 VAMP's descriptions are third-party files, not in the repository: the tests take the unpacked
 copy of the ``vamp-planner`` sdist that pip leaves in the temporary folder (``dev_resources``)
-when there is one, else
-``planning.model.vamp_resources`` downloads the sdist with pip into the session's cache; a test
-that cannot have them skips and says why. Call these from fixtures or tests, never at import
-time (the session's cache folder is set by a fixture).
+when there is one, else ``drake_sim.robots.files.vamp_resources`` downloads the sdist with pip
+into the session's cache; a test that cannot have them skips and says why. Call these from
+fixtures or tests, never at import time (the session's cache folder is set by a fixture).
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ import pytest
 import trimesh
 
 from drake_sim.base.errors import ConfigError
-from planning.model.vamp_resources import vamp_resources
+from drake_sim.robots.files.vamp_resources import vamp_resources
 
 
 def dev_resources() -> Path | None:

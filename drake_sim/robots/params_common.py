@@ -27,6 +27,8 @@ class RobotParamsBase:
     """
 
     UNSCALED: tuple[str, ...] = ()
+    FILES: tuple[str, ...] = ()
+    """Sections that are not numbers (files, names): ``scaled`` and ``check_values`` skip them."""
 
     def scaled(self, *, length: float = 1.0, mass: float = 1.0) -> Self:
         """Returns a copy with every length multiplied by ``length`` and every mass (a field
@@ -35,7 +37,7 @@ class RobotParamsBase:
         out = dc.replace(self)
         for section in dc.fields(self):
             block = dc.replace(getattr(self, section.name))
-            if section.name not in self.UNSCALED:
+            if section.name not in self.UNSCALED + self.FILES:
                 for field in dc.fields(block):
                     if field.name not in self.UNSCALED:
                         factor = mass if field.name == "mass" else length
@@ -56,6 +58,8 @@ def number_fields(params, filename: str) -> Iterator[tuple[str, float]]:
         ConfigError: naming the first value that is not an int or a float (a bool is not).
     """
     for section in dc.fields(params):
+        if section.name in getattr(params, "FILES", ()):
+            continue
         block = getattr(params, section.name)
         for field in dc.fields(block):
             value = getattr(block, field.name)

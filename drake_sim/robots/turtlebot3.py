@@ -16,6 +16,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
 
 from drake_sim.base.resources import config_dir, models_dir
+from drake_sim.robots.mobile_description import add_described
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.robots.urdf_model import add_robot_urdf, render_robot_urdf
 
@@ -67,12 +68,33 @@ def add_turtlebot3(
     plant: MultibodyPlant, params: Turtlebot3Params, *, name: str = "turtlebot3"
 ) -> ModelInstanceIndex:
     """Adds the TurtleBot3 to ``plant`` as a free body (``base_footprint``, not welded) and
-    returns its model instance.
+    returns its model instance: the project's model, or the robot's own description when
+    ``params.description`` names one (``mobile_description``).
 
-    Its two actuators are ``left_wheel_motor`` and ``right_wheel_motor``, in that order. The
-    plant needs a registered SceneGraph (the robot has visual and collision geometry).
+    Its two actuators drive the left and the right wheel, in that order. The plant needs a
+    registered SceneGraph (the robot has visual and collision geometry).
     """
+    if params.description.urdf:
+        return add_described(plant, params.description, name, params.motor.max_torque)
     return add_robot_urdf(plant, robot_urdf(params), "turtlebot3", name)
+
+
+def frame_names(params: Turtlebot3Params) -> dict[str, str]:
+    """The names of the robot's ``base`` (free body's frame, on the floor under the axle),
+    ``lidar`` frame and ``left``/``right`` wheel joints: the project's model's, or those its
+    description names."""
+    if params.description.urdf:
+        d = params.description
+        return dict(base=d.base_frame, lidar=d.lidar_frame, left=d.wheel_joints[0],
+                    right=d.wheel_joints[1])  # fmt: skip
+    return dict(base=BASE_FOOTPRINT, lidar=LIDAR_FRAME, left=LEFT_WHEEL_JOINT,
+                right=RIGHT_WHEEL_JOINT)  # fmt: skip
+
+
+def wheel_signs(params: Turtlebot3Params) -> np.ndarray:
+    """(2,) +1 where a wheel joint's positive turn drives the robot forward, else -1 (the
+    project's model: both +1)."""
+    return np.array(params.description.wheel_signs, dtype=float)
 
 
 def start_pose(x: float, y: float, yaw: float) -> RigidTransform:
@@ -81,13 +103,19 @@ def start_pose(x: float, y: float, yaw: float) -> RigidTransform:
     return RigidTransform(RollPitchYaw(0.0, 0.0, yaw), [x, y, START_LIFT])
 
 
-def wheel_state_selector(plant: MultibodyPlant, instance: ModelInstanceIndex) -> np.ndarray:
+def wheel_state_selector(
+    plant: MultibodyPlant,
+    instance: ModelInstanceIndex,
+    joints: tuple[str, str] = WHEEL_JOINTS,
+    signs=(1.0, 1.0),
+) -> np.ndarray:
     """The 4 x (nq + nv) matrix that picks ``[q_left, q_right, v_left, v_right]`` (rad,
-    rad/s) from the finalised plant's full state (for a ``MatrixGain`` on its state output)."""
-    joints = [plant.GetJointByName(name, instance) for name in WHEEL_JOINTS]
-    rows = [j.position_start() for j in joints]
-    rows += [plant.num_positions() + j.velocity_start() for j in joints]
-    return np.eye(plant.num_multibody_states())[rows]
+    rad/s, forward positive: each joint's times its sign) from the finalised plant's full state
+    (for a ``MatrixGain`` on its state output)."""
+    found = [plant.GetJointByName(name, instance) for name in joints]
+    rows = [j.position_start() for j in found]
+    rows += [plant.num_positions() + j.velocity_start() for j in found]
+    return np.tile(signs, 2)[:, None] * np.eye(plant.num_multibody_states())[rows]
 
 
 def drive_limits(params: Turtlebot3Params) -> dict[str, float]:

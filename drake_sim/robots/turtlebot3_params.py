@@ -13,11 +13,15 @@ default is NaN is required in the YAML.
 """
 
 import dataclasses as dc
-import functools
 import math
+from pathlib import Path
 
-from drake_sim.base.config import load_checked
+import yaml
+
+from drake_sim.base.config import load_checked, read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.resources import config_dir
+from drake_sim.robots.mobile_description import MobileDescription, read_numbers
 from drake_sim.robots.params_common import RobotParamsBase, check_values, write_params
 
 
@@ -79,6 +83,7 @@ class Turtlebot3Params(RobotParamsBase):
     """Dimensions, masses and limits of the TurtleBot3 Waffle (SI units)."""
 
     UNSCALED = ("motor", "limits")  # ``scaled`` leaves the torque and the limits alone.
+    FILES = ("description",)
     body: ChassisParams = dc.field(default_factory=ChassisParams)
     wheel: DriveWheelParams = dc.field(default_factory=DriveWheelParams)
     caster: BallCasterParams = dc.field(default_factory=BallCasterParams)
@@ -88,6 +93,8 @@ class Turtlebot3Params(RobotParamsBase):
     imu: MountParams = dc.field(default_factory=MountParams)
     camera: MountParams = dc.field(default_factory=MountParams)
     lidar: MountParams = dc.field(default_factory=MountParams)
+    # The robot's own ROS description instead of the project's model (``mobile_description``).
+    description: MobileDescription = dc.field(default_factory=MobileDescription)
 
     # Derived geometry. The xacro computes the same.
     @property
@@ -157,6 +164,8 @@ def validate(params: Turtlebot3Params, filename: str = "robot") -> Turtlebot3Par
         ConfigError: naming the first bad key.
     """
     check_values(params, filename, _POSITIONS)
+    if params.description.urdf:  # the description's own geometry: nothing here builds it
+        return params
     b, w, c = params.body, params.wheel, params.caster
     if params.plate_width <= 0:
         raise ConfigError(
@@ -211,13 +220,48 @@ def validate(params: Turtlebot3Params, filename: str = "robot") -> Turtlebot3Par
     return params
 
 
-load_turtlebot3_params = functools.partial(
-    load_checked, Turtlebot3Params, check=validate, what="robot file"
-)
-"""``load_turtlebot3_params(filename)``: loads and validates a TurtleBot3 YAML file (see
-``config/turtlebot3.yaml``); a ``ConfigError`` names the file and the key for a missing or malformed
-file, unknown or missing keys, or a value that is not a finite number, is out of range or gives
-an impossible robot."""
+def load_turtlebot3_params(filename) -> Turtlebot3Params:
+    """Loads and validates a TurtleBot3 YAML file (see ``config/turtlebot3.yaml``); a
+    ``ConfigError`` names the file and the key for a missing or malformed file, unknown or
+    missing keys, or a value that is not a finite number, is out of range or gives an
+    impossible robot.
+
+    A file with a ``description`` section (the robot's own URDF or xacro,
+    ``mobile_description``) needs nothing else: its other keys default to the shipped
+    TurtleBot3's, and the wheels' radius, separation and mass and the lidar's mount are read
+    from the description."""
+    where = str(filename)
+    try:  # only to see the section; load_checked reports a malformed file
+        data = yaml.safe_load(read_text(filename, "robot file"))
+    except yaml.YAMLError:
+        data = None
+    described = isinstance(data, dict) and isinstance(data.get("description"), dict)
+    defaults = load_checked(Turtlebot3Params, _SHIPPED, validate) if described else None
+    params = load_checked(
+        Turtlebot3Params, filename, validate, what="robot file", defaults=defaults
+    )
+    if not params.description.urdf:
+        return params
+    description = dc.replace(params.description, source=str(Path(filename).resolve()))
+    numbers = read_numbers(description)
+    description.wheel_signs = list(numbers.wheel_signs)
+    x, y, z = numbers.lidar_mount
+    params = dc.replace(
+        params,
+        description=description,
+        wheel=dc.replace(
+            params.wheel,
+            radius=numbers.wheel_radius,
+            separation=numbers.wheel_separation,
+            mass=numbers.wheel_mass,
+        ),
+        lidar=MountParams(x=x, y=y, z=z),
+    )
+    return validate(params, where)
+
+
+_SHIPPED = config_dir() / "turtlebot3.yaml"
+"""The shipped TurtleBot3's file: a described robot's defaults."""
 
 write_turtlebot3_params = write_params
 """``write_turtlebot3_params(params, filename)``: writes ``params`` as a complete TurtleBot3 YAML

@@ -18,8 +18,9 @@ Archives are unpacked beside their destination and renamed into place, so neithe
 running at the same time nor a run stopped half-way ever see a half-unpacked set. A set that
 cannot be had raises ``MbmDataError``, one line naming what failed.
 
-The same source distribution holds the robots' descriptions: ``planning.model.vamp_resources``
-takes them from it (``planning.model.vamp_sdist.download_sdist``).
+The same source distribution holds the robots' descriptions:
+``drake_sim.robots.files.vamp_resources`` takes them from it
+(``drake_sim.robots.files.vamp_sdist.download_sdist``).
 """
 
 from __future__ import annotations
@@ -39,8 +40,8 @@ import yaml
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
+from drake_sim.robots.files.vamp_sdist import VAMP_PACKAGE, VAMP_VERSION, download_sdist
 from planning.model.panda import ARM_JOINTS, FINGER_JOINTS
-from planning.model.vamp_sdist import VAMP_PACKAGE, VAMP_VERSION, download_sdist
 
 FAMILIES = (
     "table_pick_panda",

@@ -98,8 +98,8 @@ def load_moveit_scene(
         filename: the file.
         strict: make what cannot be represented an error, not a warning.
         package_paths: ``{package: folder}`` for ``package://`` mesh files (besides the
-            packages ``planning.model.robot_files`` knows); relative paths are relative to the
-            scene file's folder.
+            packages ``drake_sim.robots.files.robot_files`` knows); relative paths are
+            relative to the scene file's folder.
         base: plant positions that joints the scene's robot state does not name keep
             (MoveIt's defaults when None).
 

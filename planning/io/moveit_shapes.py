@@ -5,12 +5,12 @@ A ``Piece`` is one shape of an object at its pose ``X_OS`` in the object's frame
 - boxes, spheres and cylinders are kept as they are (checked exactly);
 - a mesh (``shape_msgs/Mesh``: its triangles' vertices, or a mesh file that robowflex names by
   ``resource`` with a scale per axis in ``dimensions``; a path relative to the scene file or a
-  ``package://`` URI resolved through a package map by ``planning.model.robot_files``, read by
-  trimesh through ``planning.model.mesh_convert``, so STL, COLLADA, OBJ, glTF, PLY and OFF)
-  becomes the convex hull of its vertices. MoveIt's FCL checker checks a mesh's triangles as
-  they are; Drake's proximity engine checks a ``Mesh`` or ``Convex`` as its convex hull, so a
-  concave mesh (a tote, a shelf as one mesh) is checked here as the solid that wraps it: more
-  configurations collide than in MoveIt, never fewer;
+  ``package://`` URI resolved through a package map by ``drake_sim.robots.files.robot_files``,
+  read by trimesh through ``drake_sim.robots.files.mesh_convert``, so STL, COLLADA, OBJ, glTF,
+  PLY and OFF) becomes the convex hull of its vertices. MoveIt's FCL checker checks a mesh's
+  triangles as they are; Drake's proximity engine checks a ``Mesh`` or ``Convex`` as its convex
+  hull, so a concave mesh (a tote, a shelf as one mesh) is checked here as the solid that wraps
+  it: more configurations collide than in MoveIt, never fewer;
 - a cone (MoveIt's: axis z, base of the radius at z = -length/2, apex at +length/2) becomes the
   hull of its apex and a regular ``CONE_SIDES``-gon circumscribing its base: it contains the
   cone and is at most 0.9 % of the radius wider;
@@ -169,7 +169,7 @@ def mesh_file_points(uri: str, base: Path, package_paths) -> np.ndarray:
     Raises:
         UnrepresentableError: an unknown package, a missing or unreadable file.
     """
-    from planning.model.robot_files import resolve_uri
+    from drake_sim.robots.files.robot_files import resolve_uri
 
     try:
         file = resolve_uri(uri, base, package_paths).resolve()
@@ -187,7 +187,7 @@ def mesh_file_points(uri: str, base: Path, package_paths) -> np.ndarray:
 @functools.lru_cache(maxsize=64)
 def _file_points(file: str, mtime_ns: int, size: int) -> np.ndarray:
     """A mesh file's vertices, read once per version of the file (its time and size)."""
-    from planning.model.mesh_convert import load_mesh_scene
+    from drake_sim.robots.files.mesh_convert import load_mesh_scene
 
     scene = load_mesh_scene(Path(file))
     points = np.asarray(scene.to_mesh().vertices, dtype=float)

@@ -23,14 +23,14 @@ and, for planning here (MoveIt keeps these in other files or in code; all option
                                          # 0, or the limit nearest to 0)
     collision_meshes: pieces             # hull (default): each collision mesh is checked as
                                          # its convex hull, as Drake does; pieces: cut into
-                                         # convex pieces first (planning.model.mesh_pieces),
+                                         # convex pieces first (drake_sim.robots.files.mesh_pieces),
                                          # nearer the triangles MoveIt's FCL checks
 
 Paths and package folders are relative to the YAML file; URIs (``package://``, ``$(find ...)``)
-stay as written, for ``planning.model.robot_files`` to resolve (a package's folder may be one:
-``{ur_description: package://example-robot-data/robots/ur_description}``). A file or folder
-given as a path must exist; it is made absolute without following symbolic links, so files
-beside it are found where the user put them. A key not listed above is ignored, with one
+stay as written, for ``drake_sim.robots.files.robot_files`` to resolve (a package's folder may
+be one: ``{ur_description: package://example-robot-data/robots/ur_description}``). A file or
+folder given as a path must exist; it is made absolute without following symbolic links, so
+files beside it are found where the user put them. A key not listed above is ignored, with one
 warning line.
 
 ``load_robot_description`` also takes a MoveIt config folder: its package (named in its
@@ -54,8 +54,8 @@ from pathlib import Path
 
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.robots.files.xacro_files import xacro_value
 from planning.model.srdf import default_group, load_srdf
-from planning.model.xacro_files import xacro_value
 
 _log = logging.getLogger(__name__)
 _KEYS = (

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_sim.base.errors import ConfigError
-from planning.model import robot_files
+from drake_sim.robots.files import robot_files
 from planning.model.description import RobotDescription, load_robot_description
 from planning.model.joint_limits import load_joint_limits
 from planning.model.srdf import Srdf, default_group, group_joint_names, parse_srdf

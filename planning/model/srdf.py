@@ -32,8 +32,8 @@ from pathlib import Path
 
 from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
+from drake_sim.robots.files.xacro_files import render_xacro_file
 from planning.model.urdf_tree import UrdfTree, parse_xml, required, xml_number
-from planning.model.xacro_files import render_xacro_file
 
 _log = logging.getLogger(__name__)
 VIRTUAL_JOINT_TYPES = ("fixed", "floating", "planar")

@@ -30,7 +30,7 @@ def vamp_robot_dir(robot: str) -> Path:
     """VAMP's ``resources/<robot>/`` (skips when no copy is found)."""
     candidates = []
     try:
-        from planning.model.vamp_resources import resources_root
+        from drake_sim.robots.files.vamp_resources import resources_root
 
         candidates.append(resources_root() / robot)
     except ImportError:
@@ -40,7 +40,7 @@ def vamp_robot_dir(robot: str) -> Path:
     for folder in candidates:
         if (folder / f"{robot}.urdf").is_file() and (folder / f"{robot}.srdf").is_file():
             return folder
-    pytest.skip(f"VAMP's resources/{robot} not found (fetch it with planning.model.vamp_resources)")
+    pytest.skip(f"VAMP's resources/{robot} not found (fetch it with vamp_resources)")
 
 
 def example_robot_data_dir() -> Path:

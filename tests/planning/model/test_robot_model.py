@@ -15,7 +15,7 @@ from pydrake.systems.framework import DiagramBuilder
 import planning.model.robot_model as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
-from planning.model import mesh_convert, robot_files
+from drake_sim.robots.files import mesh_convert, robot_files
 from planning.model.description import RobotDescription, load_robot_description
 from tests.robot_helpers import MOVEIT_SRDF, make_toy_robot, vamp_robot
 

@@ -1,11 +1,11 @@
-"""planning.model.vamp_sdist: pip downloads the pinned vamp-planner sdist; failures are one
+"""drake_sim.robots.files.vamp_sdist: pip downloads the pinned vamp-planner sdist; failures are one
 ConfigError line of the caller's class, naming what could not be had and how else to give it."""
 
 import subprocess
 
 import pytest
 
-import planning.model.vamp_sdist as mut
+import drake_sim.robots.files.vamp_sdist as mut
 from drake_sim.base.errors import ConfigError
 from tests.mbm_helpers import FakePip
 

@@ -8,10 +8,10 @@ import tarfile
 
 import pytest
 
-import planning.model.vamp_resources as mut
+import drake_sim.robots.files.vamp_resources as mut
 from drake_sim.base.errors import ConfigError
-from planning.model import vamp_sdist as mbm
-from planning.model.robot_files import resolve_uri
+from drake_sim.robots.files import vamp_sdist as mbm
+from drake_sim.robots.files.robot_files import resolve_uri
 from tests.mbm_helpers import FakePip
 from tests.robot_helpers import dev_resources
 

@@ -15,7 +15,7 @@ COLLADA's ``<unit meter="...">`` is applied (as RViz does); its ``up_axis`` is n
 geometric_shapes and RViz drop it too; every description checked declares ``Z_UP``). glTF is
 y-up and Drake turns it z-up on loading: a glTF source is read z-up as Drake would read it, and
 a glTF output is turned y-up first. The approach is ``planning.model.assets``'s for the Panda;
-``planning.model.robot_files`` converts each file once into the cache.
+``drake_sim.robots.files.robot_files`` converts each file once into the cache.
 """
 
 from __future__ import annotations

@@ -10,18 +10,18 @@ path relative to its YAML or by ``package://name/path``; inside the files, meshe
 2. among ``BUILTIN_PACKAGES``: ``example-robot-data`` (the installed wheel's package folder,
    which holds ``robots/<robot>_description/``) and ``vamp_resources`` (the ``resources/``
    folder of the ``vamp-planner`` source distribution, which holds ``<robot>/<robot>.urdf``,
-   ``.srdf`` and ``meshes/``; ``planning.model.vamp_resources`` fetches it into the cache the
-   first time it is named: pip from the package index, once).
+   ``.srdf`` and ``meshes/``; ``vamp_resources`` fetches it into the cache the first time it
+   is named: pip from the package index, once).
 
 ``drake_urdf`` renders the xacro (with the description's ``xacro_args``; ``$(find name)``
-resolved as above), converts every mesh the URDF names once (``planning.model.mesh_convert``)
-and writes a URDF beside them whose mesh filenames are relative, into
-``cache_dir()/robots/<hash>/``. The hash covers the rendered URDF, every mesh's bytes, this code
-and the trimesh version, so a changed input or library converts again and an unchanged one costs
-a render and a hash. Every file is written atomically, so processes converting at the same time
-do not clash. Elements Drake does not use and warns about (``transmission``, ``gazebo``,
-``safety_controller``, ``calibration``) and references to materials defined nowhere (ROS shows
-its default colour, Drake refuses the file) are left out of the copy; nothing else is changed.
+resolved as above), converts every mesh the URDF names once (``mesh_convert``) and writes a URDF
+beside them whose mesh filenames are relative, into ``cache_dir()/robots/<hash>/``. The hash
+covers the rendered URDF, every mesh's bytes, this code and the trimesh version, so a changed
+input or library converts again and an unchanged one costs a render and a hash. Every file is
+written atomically, so processes converting at the same time do not clash. Elements Drake does
+not use and warns about (``transmission``, ``gazebo``, ``safety_controller``, ``calibration``)
+and references to materials defined nowhere (ROS shows its default colour, Drake refuses the
+file) are left out of the copy; nothing else is changed.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import importlib.metadata
+import logging
 import re
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping
@@ -39,8 +40,8 @@ from drake_sim.base.config import read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.files import write_atomic
 from drake_sim.base.resources import cache_dir
-from planning.model import mesh_convert, mesh_pieces
-from planning.model.xacro_files import render_xacro_file
+from drake_sim.robots.files import mesh_convert, mesh_pieces
+from drake_sim.robots.files.xacro_files import render_xacro_file
 
 
 def _example_robot_data() -> Path:
@@ -55,7 +56,7 @@ def _example_robot_data() -> Path:
 
 
 def _vamp_resources() -> Path:
-    from planning.model import vamp_resources  # noqa: PLC0415 (it downloads: only when named)
+    from drake_sim.robots.files import vamp_resources  # noqa: PLC0415 (it downloads: only when named)
 
     return vamp_resources.ensure_resources()
 
@@ -65,6 +66,8 @@ BUILTIN_PACKAGES: dict[str, Callable[[], Path]] = {
     "vamp_resources": _vamp_resources,
 }
 """Packages found with no ``package_paths`` entry: name -> a function returning its folder."""
+
+_log = logging.getLogger(__name__)
 
 _IGNORED_ELEMENTS = ("transmission", "gazebo")
 """Top-level URDF elements left out of the Drake copy (ROS control and Gazebo only)."""
@@ -141,7 +144,8 @@ def resolve_uri(uri: str, base: Path, package_paths: Mapping[str, str] | None = 
 
 def read_robot_file(path: Path, package_paths=None, xacro_args=None) -> str:
     """Returns the text of a URDF or SRDF file, rendered with xacro when it ends in ``.xacro``
-    (``planning.model.xacro_files``), ``$(find name)`` resolving through
+    or declares the xacro namespace (TurtleBot3's ``.urdf`` files use ``$(arg)`` and ``${}``)
+    (``drake_sim.robots.files.xacro_files``), ``$(find name)`` resolving through
     ``resolve_package(name, package_paths)``.
 
     Raises:
@@ -149,7 +153,9 @@ def read_robot_file(path: Path, package_paths=None, xacro_args=None) -> str:
     """
     path = Path(path)
     if path.suffix != ".xacro":
-        return read_text(path, "robot file")
+        text = read_text(path, "robot file")
+        if "xmlns:xacro" not in text:  # a .urdf with xacro in it (ROS 2 launch files run it)
+            return text
     return render_xacro_file(
         path,
         xacro_args=xacro_args,
@@ -181,27 +187,43 @@ def urdf_text(description) -> str:
     )
 
 
-def drake_urdf(description, text: str | None = None) -> Path:
+def drake_urdf(description, text: str | None = None, *, warn: bool = True) -> Path:
     """Returns a Drake-ready copy of the description's URDF in the cache, converting on first use.
 
     Args:
         description: a ``RobotDescription``.
         text: the URDF's text when the caller has rendered it already (``urdf_text``).
+        warn: whether missing visual meshes are a warning line (False: the caller has warned
+            about this description already).
 
     Returns:
         ``cache_dir()/robots/<hash>/<robot name>.urdf``; its meshes sit in ``meshes/`` beside
         it, named ``<stem>-<content hash>.obj|.gltf`` and referred to by relative paths.
 
+    A visual mesh that cannot be found (its package unknown, its file missing: a checkout
+    without its meshes) is left out, with one warning line naming each: the link is simulated
+    and checked as before, shown without it. A missing collision mesh is an error.
+
     Raises:
-        ConfigError: the URDF is not XML, a package is unknown, a mesh file is missing or
-            unreadable.
+        ConfigError: the URDF is not XML, a collision mesh's package is unknown or its file
+            missing, a mesh file is unreadable.
     """
     source = urdf_file(description)
     text = urdf_text(description) if text is None else text
     root = _parse_urdf(text, source)
-    meshes = _mesh_elements(root, source, package_map(description))
+    missing: list[tuple[ET.Element, str]] = []
+    meshes = _mesh_elements(root, source, package_map(description), missing)
+    if missing:
+        _drop_visuals(root, [mesh for mesh, _ in missing])
+    if missing and warn:
+        _log.warning(
+            "%s: visual meshes not found, shown without them: %s",
+            source,
+            "; ".join(where for _, where in missing),
+        )
     digest = hashlib.sha256(Path(__file__).read_bytes() + Path(mesh_convert.__file__).read_bytes())
     digest.update(f"trimesh {mesh_convert.trimesh_version()}\0".encode() + text.encode())
+    digest.update(f"{len(missing)} visual meshes missing".encode())
     pieces = getattr(description, "collision_meshes", "hull") == "pieces"
     if pieces:  # CoACD, its settings and this code cut the meshes
         digest.update(Path(mesh_pieces.__file__).read_bytes())
@@ -280,9 +302,11 @@ def _parse_urdf(text: str, source: Path) -> ET.Element:
         raise ConfigError(f"{source}: not a URDF ({e})") from None
 
 
-def _mesh_elements(root: ET.Element, source: Path, package_paths) -> list:
+def _mesh_elements(root: ET.Element, source: Path, package_paths, missing=None) -> list:
     """``(mesh element, "visual"|"collision", file)`` for every mesh of every link; relative
-    filenames are relative to the URDF (or xacro) file's folder.
+    filenames are relative to the URDF (or xacro) file's folder. With a list ``missing``, a
+    visual mesh that cannot be found is appended there as ``(mesh element, description)``
+    instead of being an error.
 
     Raises:
         ConfigError: a mesh without a filename, an unknown package, or a missing file.
@@ -297,14 +321,24 @@ def _mesh_elements(root: ET.Element, source: Path, package_paths) -> list:
                     if not uri:
                         raise ConfigError(f"{where} has no filename")
                     try:
-                        path = resolve_uri(uri, source.parent, package_paths)
+                        path = resolve_uri(uri, source.parent, package_paths).resolve()
+                        if not path.is_file():
+                            raise ConfigError(f"file {path} does not exist")
                     except ConfigError as e:
+                        if kind == "visual" and missing is not None:
+                            missing.append((mesh, f"link {link.get('name')!r} {uri}"))
+                            continue
                         raise ConfigError(f"{where} {uri}: {e}") from None
-                    path = path.resolve()
-                    if not path.is_file():
-                        raise ConfigError(f"{where} {uri}: file {path} does not exist")
                     found.append((mesh, kind, path))
     return found
+
+
+def _drop_visuals(root: ET.Element, meshes: list[ET.Element]) -> None:
+    """Removes the ``<visual>`` elements holding ``meshes``."""
+    parents = {child: parent for parent in root.iter() for child in parent}
+    for mesh in meshes:
+        visual = parents[parents[mesh]]
+        parents[visual].remove(visual)
 
 
 def _strip_ignored(root: ET.Element) -> None:

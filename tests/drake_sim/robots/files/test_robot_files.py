@@ -13,9 +13,9 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-import planning.model.robot_files as mut
+import drake_sim.robots.files.robot_files as mut
 from drake_sim.base.errors import ConfigError
-from planning.model import mesh_convert
+from drake_sim.robots.files import mesh_convert
 from planning.model.description import load_robot_description
 from planning.model.srdf import parse_srdf
 from tests.robot_helpers import MOVEIT_SRDF, make_toy_robot
@@ -74,7 +74,7 @@ def test_a_package_folder_that_is_not_there_is_named(tmp_path):
 
 
 def test_vamp_resources_are_fetched_when_first_named(tmp_path, monkeypatch):
-    from planning.model import vamp_resources
+    from drake_sim.robots.files import vamp_resources
 
     calls = []
 
@@ -235,3 +235,37 @@ def test_a_mesh_in_an_unknown_package_names_it(toy, own_cache):
 def test_not_a_urdf_is_a_config_error(toy, own_cache):
     message = errors(lambda: mut.drake_urdf(toy, "<robot"))
     assert "not a URDF" in message
+
+
+def test_a_missing_visual_mesh_is_left_out_with_one_warning(toy, own_cache, caplog):
+    """A checkout without its visual meshes (TurtleBot3's ``bases/`` missing) still loads: the
+    link keeps its collision geometry and is shown without the mesh."""
+    missing = Path(toy.package_paths["toy_description"]) / "meshes" / "link1.glb"
+    missing.unlink()
+    with caplog.at_level("WARNING"):
+        urdf = mut.drake_urdf(toy)
+    (record,) = [r for r in caplog.records if "visual meshes not found" in r.getMessage()]
+    assert "'link1'" in record.getMessage() and "link1.glb" in record.getMessage()
+    root = ET.parse(urdf).getroot()
+    link1 = next(link for link in root.iter("link") if link.get("name") == "link1")
+    assert link1.find("visual") is None and link1.find("collision") is not None
+    caplog.clear()
+    with caplog.at_level("WARNING"):
+        assert mut.drake_urdf(toy, warn=False) == urdf  # the caller warned already
+    assert not caplog.records
+
+
+def test_a_urdf_with_xacro_in_it_is_rendered(tmp_path):
+    """ROS 2's TurtleBot3 ``.urdf`` files hold ``xacro:arg`` and ``${}``: rendered, as the
+    launch files do."""
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text(
+        '<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro">'
+        '<xacro:arg name="namespace" default="ns_"/>'
+        '<xacro:property name="namespace" value="$(arg namespace)"/>'
+        '<link name="${namespace}base"/></robot>'
+    )
+    assert 'name="ns_base"' in mut.read_robot_file(urdf)
+    plain = tmp_path / "plain.urdf"
+    plain.write_text('<robot name="r"><link name="${kept}"/></robot>')
+    assert "${kept}" in mut.read_robot_file(plain)  # no xacro namespace: read as it is

@@ -3,10 +3,10 @@
 VAMP's source distribution (the one ``planning.io.mbm`` takes the MotionBenchMaker sets from)
 ships each robot's description as ``resources/<robot>/``: ``<robot>.urdf``, ``<robot>.srdf``,
 ``meshes/`` (and a spherized URDF). ``vamp_resources`` puts them where
-``planning.model.robot_files`` finds its built-in package ``vamp_resources`` (fetched on demand)
+``robot_files`` finds its built-in package ``vamp_resources`` (fetched on demand)
 (``package://vamp_resources/<robot>/<robot>.urdf``), checked against ``RESOURCES_SHA256``:
 from a folder or sdist the caller gives, else from the sdist pip downloads from the package
-index (``planning.model.vamp_sdist.download_sdist``). Nothing is committed; nothing is
+index (``drake_sim.robots.files.vamp_sdist.download_sdist``). Nothing is committed; nothing is
 downloaded twice.
 
 Each robot's folder is copied beside its place, checked, stamped with its digest (``.sha256``)
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import cache_dir
-from planning.model.vamp_sdist import VAMP_PACKAGE, VAMP_VERSION, download_sdist
+from drake_sim.robots.files.vamp_sdist import VAMP_PACKAGE, VAMP_VERSION, download_sdist
 
 RESOURCES_SHA256 = {
     "panda": "fe28f0784d1e175c44f07b24641e9e9e85fdb20afd9b59adf40773607b5cb354",

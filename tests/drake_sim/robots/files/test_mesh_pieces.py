@@ -12,9 +12,9 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-import planning.model.mesh_pieces as mut
+import drake_sim.robots.files.mesh_pieces as mut
 from drake_sim.base.errors import ConfigError
-from planning.model import robot_files
+from drake_sim.robots.files import robot_files
 from planning.model.description import load_robot_description
 from tests.robot_helpers import make_toy_robot
 

@@ -1,7 +1,7 @@
 """The ``vamp-planner`` release whose source distribution holds the MotionBenchMaker sets and the
 robots' descriptions, and ``download_sdist``: pip downloads it from the package index (the only
 network the project uses at run time). ``planning.io.mbm`` takes the sets from it,
-``planning.model.vamp_resources`` the descriptions."""
+``drake_sim.robots.files.vamp_resources`` the descriptions."""
 
 from __future__ import annotations
 

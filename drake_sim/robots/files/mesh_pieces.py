@@ -11,8 +11,8 @@ the whole mesh (every piece is a part of it, and a part lies in its own hull), o
 what is not mesh: a path free of the pieces is free of the mesh.
 
 Each piece is written as an OBJ of its hull's vertices and faces, named by the source's content
-hash, the settings and the piece's number; the caller (``planning.model.robot_files``) keys the
-whole converted robot on this file and CoACD's version too, so new settings cut again.
+hash, the settings and the piece's number; the caller (``robot_files``) keys the whole
+converted robot on this file and CoACD's version too, so new settings cut again.
 """
 
 from __future__ import annotations

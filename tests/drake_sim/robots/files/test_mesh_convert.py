@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-import planning.model.mesh_convert as mut
+import drake_sim.robots.files.mesh_convert as mut
 from drake_sim.base.errors import ConfigError
 
 

@@ -5,7 +5,7 @@ import pytest
 import xacro
 from xacro import substitution_args
 
-import planning.model.xacro_files as mut
+import drake_sim.robots.files.xacro_files as mut
 from drake_sim.base.errors import ConfigError
 from tests.planning.model.real_files import moveit_srdf_dir
 
