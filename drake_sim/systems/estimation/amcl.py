@@ -76,13 +76,15 @@ class Amcl(LeafSystem):
         - pose
         - covariance
         - particles
+        - localized
 
     ``scan`` is the ``Lidar``'s ``LaserScan``; ``odometry`` the robot's ``[x, y, yaw]`` from
     wheel odometry (m, m, rad) in any fixed frame. Each new scan is taken ``SCAN_DELAY`` after
     it was made (``period``: the lidar's). ``pose`` is the base's ``[x, y, yaw]`` in the map
     (world) frame: the estimate at the last filter update moved on by the odometry since;
     ``covariance`` the 9 entries (row-major) of its 3x3 covariance (m^2, rad^2); ``particles``
-    the (n, 3) particle cloud (an abstract numpy array).
+    the (n, 3) particle cloud (an abstract numpy array); ``localized`` 1 once the filter has
+    settled on one pose (``localized``), else 0.
 
     Args:
         map: the ``OccupancyMap`` to localise on.
@@ -143,6 +145,12 @@ class Amcl(LeafSystem):
             lambda context, out: out.set_value(self._get(context).filter.particles.copy()),
             ticket,
         )
+        self.DeclareVectorOutputPort(
+            "localized",
+            1,
+            lambda context, out: out.SetFromVector([float(self.localized(context))]),
+            ticket,
+        )
 
     def _get(self, context) -> _AmclState:
         return context.get_abstract_state(self._state).get_value()
@@ -150,6 +158,12 @@ class Amcl(LeafSystem):
     def particle_filter(self, context) -> ParticleFilter:
         """The filter (particles, weights, estimate) in ``context``; read only."""
         return self._get(context).filter
+
+    def localized(self, context) -> bool:
+        """Whether the filter has settled on one pose (``ParticleFilter.localized``): after
+        ``start_global_localization`` a navigation run spins the robot in place until it has
+        (or a time limit passes) before it drives to its goals."""
+        return self._get(context).filter.localized()
 
     def history(self, context) -> np.ndarray:
         """(n, 5) rows ``[t, x, y, yaw, particle count]``, one per filter update: the

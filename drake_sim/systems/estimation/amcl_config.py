@@ -27,6 +27,11 @@ class AmclConfig:
 
     min_particles: int = 100  # Fewest particles, >= 1.
     max_particles: int = 5000  # Most particles, >= min_particles.
+    # Ours: a global spread (global localisation) puts this many particles per m^2 of free
+    # space (at least max_particles): a large map needs more to put some near the truth, as
+    # KLD sampling's bound grows with the bins a uniform spread covers. The first update
+    # weighs them all and resamples max_particles. >= 0; 0: max_particles, as ROS.
+    global_localization_density: float = 0.0
     kld_err: float = 0.01  # KLD bound on the error of the sampled distribution, > 0.
     kld_z: float = 0.99  # Upper standard normal quantile of the KLD bound, > 0.
     update_min_d: float = 0.2  # m moved before a filter update, >= 0.
@@ -50,6 +55,10 @@ class AmclConfig:
     laser_sigma_hit: float = 0.2  # m, std dev of the hit part, > 0.
     laser_likelihood_max_dist: float = 2.0  # m, cap of the distance field, > 0.
     laser_model_type: str = "likelihood_field"  # The only model implemented.
+    # Ours, not ROS's (whose likelihood field skips them): also score the beams that saw
+    # nothing, by tracing each ray through the map (a hit when it runs free to the maximum
+    # range); the evidence that makes global localisation work in large open spaces.
+    laser_no_return_beams: bool = False
     # ROS's odometry models: diff-corrected, diff (ROS 1's original: the alphas' mix used as a
     # standard deviation, not a variance), omni-corrected, omni (holonomic: alpha5 strafes).
     odom_model_type: str = "diff-corrected"
@@ -102,6 +111,8 @@ def check_amcl_config(
         value = getattr(config, field.name)
         if isinstance(value, float) and not math.isfinite(value):
             fail(field.name, "finite")
+    if config.global_localization_density < 0:
+        fail("global_localization_density", "non-negative")
     if config.min_particles < 1:
         fail("min_particles", "at least 1")
     if config.max_particles < config.min_particles:
@@ -157,6 +168,22 @@ def check_amcl_config(
     if config.odom_model_type not in ODOM_MODELS:
         fail("odom_model_type", f"one of {', '.join(ODOM_MODELS)}")
     return config
+
+
+def check_pose_covariance(pose, covariance) -> tuple[np.ndarray, np.ndarray]:
+    """Returns (pose (3,), covariance (3, 3)) as arrays; ``ConfigError`` unless both are finite
+    and the covariance symmetric positive semi-definite."""
+    pose = np.asarray(pose, dtype=float)
+    covariance = np.asarray(covariance, dtype=float)
+    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        raise ConfigError(f"initial pose: expected 3 finite numbers [x, y, yaw], got {pose}")
+    if covariance.shape != (3, 3) or not np.all(np.isfinite(covariance)):
+        raise ConfigError(f"initial covariance: expected a finite 3x3 matrix, got {covariance}")
+    if not np.allclose(covariance, covariance.T, atol=1e-12):
+        raise ConfigError("initial covariance: must be symmetric")
+    if np.linalg.eigvalsh(covariance).min() < -1e-12:
+        raise ConfigError("initial covariance: must be positive semi-definite")
+    return pose, covariance
 
 
 def load_amcl_config(path: Path | str) -> AmclConfig:

@@ -1,7 +1,11 @@
 """AMCL's sensor model: the likelihood field of a map (Probabilistic Robotics, Table 6.3) and
 the weight ROS's ``amcl`` gives each particle for a scan on it, one compiled numba kernel over
-particles x beams (cached on disk). Part of the particle filter
-(``drake_sim.systems.estimation.particle_filter``, whose docstring gives the model).
+particles x beams (cached on disk); and our term for the beams that saw nothing
+(``laser_no_return_beams``): each such ray is traced through the map's distance field (sphere
+tracing: steps as long as the distance to the nearest occupied cell, so a ray across open floor
+takes two or three) and scores as a hit when the map lets it run free to the maximum range.
+Part of the particle filter (``drake_sim.systems.estimation.particle_filter``, whose docstring
+gives the model).
 """
 
 import math
@@ -41,16 +45,112 @@ def scan_likelihood(particles, bx, by, table, origin, resolution, shape, z_hit, 
     return result
 
 
-def likelihood_table(occupancy_map: OccupancyMap, config: AmclConfig):
-    """(table, resolution): exp(-d^2 / (2 sigma_hit^2)) per cell (flattened, row-major),
-    ``d`` the distance (m) to the nearest occupied cell capped at laser_likelihood_max_dist,
-    with one more entry at the cap for points off the map."""
+@numba.njit(cache=True)
+def no_return_likelihood(
+    particles,
+    sensor,
+    ux,
+    uy,
+    distance,
+    origin,
+    resolution,
+    shape,
+    range_max,
+    sigma,
+    z_hit,
+    z_rand_term,
+):
+    """Sum over the beams that saw nothing (no return within ``range_max``) of ``pz^3``, per
+    particle (n,), with ``pz = z_hit * exp(-s^2 / (2 sigma^2)) + z_rand_term``: ``s`` (m) is how
+    far short of ``range_max`` the ray meets an occupied cell of the map (0 when it runs free).
+
+    Args:
+        particles: (n, 3) poses [x, y, yaw] of the base in the world.
+        sensor: [x, y] of the sensor in the base frame (m).
+        ux, uy: (k,) unit directions of the beams in the base frame.
+        distance: from ``distance_table``: m to the nearest occupied cell's centre per cell
+            (flattened, row-major), capped. A ray that leaves the map runs free.
+        origin, resolution, shape: the map's.
+    """
+    n_rows, n_cols = shape
+    x0, y0, yaw0 = origin
+    c0, s0 = math.cos(yaw0), math.sin(yaw0)
+    inv = 1.0 / resolution
+    # A point in a cell whose centre is d from an occupied cell's centre is at least
+    # d - sqrt(2) cells from that cell: steps that long cannot pass over it.
+    margin, least = 1.5 * resolution, 0.5 * resolution
+    result = np.zeros(particles.shape[0])
+    for i in range(particles.shape[0]):
+        cos_t, sin_t = math.cos(particles[i, 2]), math.sin(particles[i, 2])
+        sx = particles[i, 0] + cos_t * sensor[0] - sin_t * sensor[1] - x0
+        sy = particles[i, 1] + sin_t * sensor[0] + cos_t * sensor[1] - y0
+        lx, ly = (c0 * sx + s0 * sy) * inv, (-s0 * sx + c0 * sy) * inv  # in cells
+        total = 0.0
+        for j in range(ux.shape[0]):
+            dx, dy = cos_t * ux[j] - sin_t * uy[j], sin_t * ux[j] + cos_t * uy[j]
+            mx, my = (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
+            s = 0.0
+            while s < range_max:
+                col = math.floor(lx + mx * s)
+                row = math.floor(ly + my * s)
+                if not (0 <= row < n_rows and 0 <= col < n_cols):
+                    s = range_max  # off the map (which is convex): nothing more to meet
+                    break
+                d = distance[row * n_cols + col]
+                if d <= 0.0:
+                    break
+                s += max(d - margin, least)
+            short = max(range_max - s, 0.0)
+            pz = z_hit * math.exp(-(short * short) / (2.0 * sigma * sigma)) + z_rand_term
+            total += pz * pz * pz
+        result[i] = total
+    return result
+
+
+def no_return_factor(
+    particles, angles, sensor, distance, occupancy_map: OccupancyMap, config: AmclConfig, range_max
+) -> np.ndarray:
+    """The factor (n,) in (0, 1] by which the beams at ``angles`` (rad, base frame) that saw
+    nothing weigh each particle: ROS's combination ``1 + sum(pz^3)`` of ``no_return_likelihood``
+    for them apart, over its value when every ray runs free, so the hits keep their strength.
+
+    Args:
+        sensor: [x, y, yaw] of the sensor in the base frame; ``distance``: ``distance_table``.
+    """
+    z_rand_term = config.laser_z_rand / range_max
+    free = 1.0 + len(angles) * (config.laser_z_hit + z_rand_term) ** 3
+    total = no_return_likelihood(
+        particles,
+        np.asarray(sensor[:2], dtype=float),
+        np.cos(angles),
+        np.sin(angles),
+        distance,
+        occupancy_map.origin,
+        occupancy_map.resolution,
+        occupancy_map.shape,
+        range_max,
+        config.laser_sigma_hit,
+        config.laser_z_hit,
+        z_rand_term,
+    )
+    return (1.0 + total) / free
+
+
+def distance_table(occupancy_map: OccupancyMap, cap: float) -> np.ndarray:
+    """The distance (m) from each cell's centre to the nearest occupied cell's centre, capped at
+    ``cap``, flattened row-major, with one more entry (``cap``) for points off the map."""
     occupied = occupancy_map.occupied()
-    cap = config.laser_likelihood_max_dist
     if occupied.any():
         distance = ndimage.distance_transform_edt(~occupied) * occupancy_map.resolution
         distance = np.minimum(distance, cap)
     else:
         distance = np.full(occupied.shape, cap)
-    d = np.append(distance.ravel(), cap)
+    return np.append(distance.ravel(), cap)
+
+
+def likelihood_table(occupancy_map: OccupancyMap, config: AmclConfig):
+    """(table, resolution): exp(-d^2 / (2 sigma_hit^2)) per cell (flattened, row-major),
+    ``d`` the distance (m) to the nearest occupied cell capped at laser_likelihood_max_dist,
+    with one more entry at the cap for points off the map."""
+    d = distance_table(occupancy_map, config.laser_likelihood_max_dist)
     return np.exp(-(d * d) / (2.0 * config.laser_sigma_hit**2)), occupancy_map.resolution

@@ -22,7 +22,9 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   skipped; a particle's weight is multiplied by ``1 + sum(pz^3)`` (ROS's combination, which
   is less overconfident than the product). ``d`` comes from a Euclidean distance transform of
   the map's occupied cells, computed once and capped at ``laser_likelihood_max_dist``; points
-  off the map take that cap;
+  off the map take that cap. With ``laser_no_return_beams`` (ours) the beams that saw nothing
+  count too (``likelihood_field.no_return_factor``): a 3.5 m lidar in a 30 m hall sees almost
+  nothing, and "no wall within range here" is then most of what the scan says;
 * resampling every ``resample_interval`` updates with a particle count chosen by KLD sampling
   (Fox 2003): ``n`` grows until it exceeds the bound for the number ``k`` of histogram bins
   (0.5 m x 0.5 m x 10 degrees, as ROS) that the new set occupies, between ``min_particles``
@@ -50,6 +52,12 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   them and a rejected match leaves the filter's bias (measured in the warehouse, navigation to
   10 goals: worst goal 2.1 cm with the shift, 2.6 to 5.3 cm without).
 
+Global localisation on a large map (ours): ``global_localization_density`` particles per m^2
+of free space (nav2's depot: 90,000), weighed by the first update and resampled to
+``max_particles``; ``localized`` tells when the cloud has settled. Measured in the depot and
+the warehouse: it converges once the robot has seen enough structure, but a wrong pose among
+repeated shelves can win (recovery cannot help: it fits as well as the truth).
+
 Deliberate differences from ROS: the update threshold ``update_min_d`` applies to the distance
 moved (ROS compares |dx| and |dy| separately); ``w_avg`` is the expected likelihood of the scan
 (Probabilistic Robotics; ROS divides it by the particle count as well); global localisation
@@ -59,8 +67,7 @@ particles are all equally bad, so the effective sample size alone would never re
 ROS, ``kld_z`` is used as the normal quantile itself.
 
 Cost (``benchmarks/amcl_benchmark.py``, 2 cores): 1.2 to 1.9 ms median per update with 2000
-particles and 60 beams (the sensor model about 0.4 ms, the clustered estimate 0.5 ms), plus
-about 1.5 ms for the scan-to-map refinement (180 beams).
+particles and 60 beams, plus about 1.5 ms for the refinement (180 beams).
 """
 
 import math
@@ -70,10 +77,21 @@ import numpy as np
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
 from drake_sim.base.planar import compose, relative_pose, wrap_angle
-from drake_sim.systems.estimation.amcl_config import AmclConfig
-from drake_sim.systems.estimation.likelihood_field import likelihood_table, scan_likelihood
+from drake_sim.systems.estimation.amcl_config import AmclConfig, check_pose_covariance
+from drake_sim.systems.estimation.likelihood_field import (
+    distance_table,
+    likelihood_table,
+    no_return_factor,
+    scan_likelihood,
+)
 from drake_sim.systems.estimation.map_refinement import match_pyramid, refine_pose
-from drake_sim.systems.estimation.pose_histogram import cluster_estimate, kld_count
+from drake_sim.systems.estimation.pose_histogram import (
+    LOCALIZED_SHARE,
+    LOCALIZED_STD,
+    cluster_estimate,
+    kld_count,
+    settled,
+)
 from drake_sim.systems.estimation.scan_matcher import MatchResult
 
 
@@ -99,6 +117,11 @@ class ParticleFilter:
         self.map = occupancy_map
         self._rng = np.random.default_rng(seed)
         self._field = likelihood_table(occupancy_map, self.config)
+        self._distance = (
+            distance_table(occupancy_map, config.laser_likelihood_max_dist)
+            if config.laser_no_return_beams
+            else None
+        )
         self._pyramid = match_pyramid(occupancy_map, config) if config.scan_match_refinement else []
         self.last_match: MatchResult | None = None  # The last refinement's match, if any.
         self.refinements = [0, 0]  # Refinements [accepted, rejected] so far.
@@ -139,16 +162,20 @@ class ParticleFilter:
             ConfigError: a pose or covariance that is not finite, or a covariance that is
                 not symmetric positive semi-definite.
         """
-        pose, covariance = _check_pose(pose, covariance)
+        pose, covariance = check_pose_covariance(pose, covariance)
         n = self.config.max_particles
         particles = self._rng.multivariate_normal(pose, covariance, size=n, method="eigh")
         particles[:, 2] = wrap_angle(particles[:, 2])
         self._restart(particles, odom_pose)
 
     def global_localization(self) -> None:
-        """Starts again from ``max_particles`` poses uniform over the map's free space (ROS's
-        ``global_localization`` service). The next update always runs."""
-        self._restart(self._random_poses(self.config.max_particles), None)
+        """Starts again from poses uniform over the map's free space (ROS's
+        ``global_localization`` service): ``global_localization_density`` per m^2 of it (at
+        least ``max_particles``), which the next update (it always runs) weighs and resamples
+        down to ``max_particles``."""
+        area = len(self._free_cells) * self.map.resolution**2
+        count = max(int(self.config.global_localization_density * area), self.config.max_particles)
+        self._restart(self._random_poses(count), None)
 
     def update(
         self, odom_pose, ranges, angles, *, range_max, range_min=0.0, X_base_sensor=(0, 0, 0)
@@ -188,7 +215,10 @@ class ParticleFilter:
         )
         self._sense(*scan)
         self._resample_count += 1
-        if self._resample_count % self.config.resample_interval == 0 and self._degenerate():
+        crowded = len(self.particles) > self.config.max_particles  # a global spread
+        if crowded or (
+            self._resample_count % self.config.resample_interval == 0 and self._degenerate()
+        ):
             self._resample()
         self._odom, self._force = odom.copy(), False
         self.updates += 1
@@ -202,6 +232,13 @@ class ParticleFilter:
         and the whole set's covariance (m, rad)."""
         pose, covariance = self._estimate
         return pose.copy(), covariance.copy()
+
+    def localized(self, *, share=LOCALIZED_SHARE, std=LOCALIZED_STD) -> bool:
+        """Whether the filter has settled on one pose (``pose_histogram.settled``: the heaviest
+        cluster holds ``share`` of the weight, its positions within ``std`` m): what a global
+        localisation waits for before driving off, as nav2 users watch the cloud shrink while
+        the robot spins. It cannot tell a wrong pose from the right one where the map repeats."""
+        return self.updates > 0 and settled(self.particles, self.weights, share, std)
 
     # The steps of an update.
 
@@ -270,24 +307,24 @@ class ParticleFilter:
         beams = np.unique(np.linspace(0, len(ranges) - 1, c.laser_max_beams).round().astype(int))
         r, a = ranges[beams], angles[beams]
         ok = np.isfinite(r) & (r < range_max) & (r > range_min)
+        none = ~(np.isfinite(r) & (r < range_max)) if c.laser_no_return_beams else ok & False
+        a_none = a[none] + sensor[2]
         r, a = r[ok], a[ok]
-        if r.size == 0:
+        if not (len(r) or len(a_none)):
             return
         # Beam end points in the base frame.
         bx = sensor[0] + r * np.cos(sensor[2] + a)
         by = sensor[1] + r * np.sin(sensor[2] + a)
         table, resolution = self._field
+        args = (self.map.origin, resolution, self.map.shape)
+        z_rand_term = c.laser_z_rand / range_max
         likelihood = scan_likelihood(
-            self.particles,
-            bx,
-            by,
-            table,
-            self.map.origin,
-            resolution,
-            self.map.shape,
-            c.laser_z_hit,
-            c.laser_z_rand / range_max,
+            self.particles, bx, by, table, *args, c.laser_z_hit, z_rand_term
         )
+        if len(a_none):
+            likelihood *= no_return_factor(
+                self.particles, a_none, sensor, self._distance, self.map, c, range_max
+            )
         weighted = self.weights * likelihood
         w_avg = float(np.sum(weighted))  # the scan's expected likelihood
         self.weights = weighted / w_avg
@@ -359,17 +396,3 @@ class ParticleFilter:
         y = y0 + s0 * local[:, 0] + c0 * local[:, 1]
         yaw = self._rng.uniform(-math.pi, math.pi, count)
         return np.stack([x, y, yaw], -1)
-
-
-def _check_pose(pose, covariance) -> tuple[np.ndarray, np.ndarray]:
-    pose = np.asarray(pose, dtype=float)
-    covariance = np.asarray(covariance, dtype=float)
-    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-        raise ConfigError(f"initial pose: expected 3 finite numbers [x, y, yaw], got {pose}")
-    if covariance.shape != (3, 3) or not np.all(np.isfinite(covariance)):
-        raise ConfigError(f"initial covariance: expected a finite 3x3 matrix, got {covariance}")
-    if not np.allclose(covariance, covariance.T, atol=1e-12):
-        raise ConfigError("initial covariance: must be symmetric")
-    if np.linalg.eigvalsh(covariance).min() < -1e-12:
-        raise ConfigError("initial covariance: must be positive semi-definite")
-    return pose, covariance

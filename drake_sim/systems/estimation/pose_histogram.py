@@ -20,6 +20,11 @@ BIN_YAW = math.radians(10.0)
 YAW_BINS = 36
 """Yaw bins of the histogram (a full turn)."""
 
+LOCALIZED_SHARE = 0.95
+"""``settled``'s default: the least share of the weight in the heaviest cluster."""
+LOCALIZED_STD = 0.1
+"""m: ``settled``'s default: the most standard deviation of that cluster's positions."""
+
 
 def kld_limit(k, config: AmclConfig) -> np.ndarray:
     """The KLD bound (Fox 2003, ROS's ``pf_resample_limit``): particles needed when the set
@@ -56,9 +61,7 @@ def bin_keys(poses: np.ndarray) -> np.ndarray:
 
 def cluster_estimate(particles: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """ROS's estimate: the heaviest cluster's mean, the whole set's covariance."""
-    labels = clusters(particles)
-    totals = np.bincount(labels, weights=weights)
-    best = labels == int(np.argmax(totals))
+    best, _ = heaviest_cluster(particles, weights)
     w = weights[best] / weights[best].sum()
     p = particles[best]
     mean_yaw = math.atan2(float(w @ np.sin(p[:, 2])), float(w @ np.cos(p[:, 2])))
@@ -70,6 +73,23 @@ def cluster_estimate(particles: np.ndarray, weights: np.ndarray) -> tuple[np.nda
     resultant = math.hypot(float(w @ np.sin(particles[:, 2])), float(w @ np.cos(particles[:, 2])))
     covariance[2, 2] = -2.0 * math.log(max(resultant, 1e-300))
     return pose, covariance
+
+
+def heaviest_cluster(particles: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, float]:
+    """(mask (n,) of the heaviest cluster's particles, its share of the total weight)."""
+    labels = clusters(particles)
+    totals = np.bincount(labels, weights=weights)
+    label = int(np.argmax(totals))
+    return labels == label, float(totals[label] / totals.sum())
+
+
+def settled(particles, weights, share=LOCALIZED_SHARE, std=LOCALIZED_STD) -> bool:
+    """Whether the heaviest cluster holds at least ``share`` of the weight and its positions'
+    weighted standard deviation (x and y together) is at most ``std`` m."""
+    best, held = heaviest_cluster(particles, weights)
+    w = weights[best] / weights[best].sum()
+    xy = particles[best, :2] - w @ particles[best, :2]
+    return held >= share and math.sqrt(float(w @ np.sum(xy * xy, axis=1))) <= std
 
 
 def clusters(particles: np.ndarray) -> np.ndarray:

@@ -167,9 +167,11 @@ def test_start_global_localization_then_converges_while_driving():
     )
     covariance = dut.GetOutputPort("covariance").Eval(context)
     assert covariance[0] > 1.0
+    assert not dut.localized(context)
     simulator.AdvanceTo(14.1)
     pose = dut.GetOutputPort("pose").Eval(context)
     assert math.dist(pose[:2], true_pose(14.1)[:2]) < 0.05
+    assert dut.localized(context)
 
 
 def test_same_seed_same_estimates():

@@ -36,6 +36,8 @@ from drake_sim.base.errors import ConfigError
         ("refinement_min_points", 2, "at least 3"),
         ("refinement_levels", 0, "at least 1"),
         ("refinement_iterations", 0, "at least 1"),
+        ("global_localization_density", -1.0, "non-negative"),
+        ("global_localization_density", float("inf"), "finite"),
     ],
 )
 def test_bad_values_name_the_key(key, value, words):
@@ -75,4 +77,20 @@ def test_defaults_are_ros_amcl_and_the_shipped_file_loads():
     assert shipped.max_particles == 8000 and shipped.laser_max_beams == 90
     # The scan-to-map refinement is ours: off by default (ROS's filter), on in the shipped file.
     assert not ros.scan_match_refinement and shipped.scan_match_refinement
+    # So are the beams that saw nothing and the density of a global spread: ROS's by default.
+    assert not ros.laser_no_return_beams and shipped.laser_no_return_beams
+    assert ros.global_localization_density == 0.0 < shipped.global_localization_density
     np.testing.assert_allclose(np.diag(shipped.initial_covariance()), [0.25, 0.25, 0.2742])
+
+
+def test_check_pose_covariance_takes_finite_poses_and_psd_covariances():
+    pose, covariance = mut.check_pose_covariance([1, 2, 0.5], np.eye(3) * 0.1)
+    assert pose.dtype == float and pose.shape == (3,) and covariance.shape == (3, 3)
+    for bad, words in [
+        (([math.nan, 0, 0], np.eye(3)), "3 finite numbers"),
+        (([0, 0, 0], np.ones((2, 2))), "finite 3x3"),
+        (([0, 0, 0], np.triu(np.ones((3, 3)))), "symmetric"),
+        (([0, 0, 0], -np.eye(3)), "positive semi-definite"),
+    ]:
+        with pytest.raises(ConfigError, match=words):
+            mut.check_pose_covariance(*bad)
