@@ -135,6 +135,25 @@ SECTIONS = (
         "goals per arena, and AMCL's cost per update.",
     ),
     Section(
+        "barn",
+        "BARN with no prior map",
+        _script("barn", "--worlds", "6"),
+        "Six of BARN's 300 obstacle courses (Perille et al. 2020), driven as `navigate` does "
+        "with no `--map`: the live SLAM localises, the costmaps fill from the lidar. A world "
+        "succeeds when the goal 10 m ahead is reached with no collision within 100 simulated "
+        "seconds. Needs the BARN arenas (`shared/benchmarks/barn` beside the checkout, or "
+        "`$DRAKE_SIM_BARN`).",
+    ),
+    Section(
+        "real_maps",
+        "Navigation on real maps",
+        _script("real_maps"),
+        "The TurtleBot3 world, nav2's depot and its warehouse simulated from their map files "
+        "alone, AMCL from the true start (and, on the TurtleBot3 world, from no guess), with "
+        "the DWA and with the TEB local planner. Needs the maps (`shared/real_ros/maps` beside "
+        "the checkout, or `$DRAKE_SIM_REAL_MAPS`).",
+    ),
+    Section(
         "amcl",
         "AMCL",
         _script("amcl", "--seeds", "3"),

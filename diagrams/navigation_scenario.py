@@ -13,6 +13,7 @@ from diagrams.mapping_scenario import config_path
 from diagrams.ros_params import ros_overrides
 from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.config import apply_overrides, load_checked
+from drake_sim.base.errors import ConfigError
 from drake_sim.base.resources import config_dir
 from drake_sim.navigation.navigator import NavigatorConfig, check_navigator_config
 from drake_sim.systems.estimation.amcl import (
@@ -22,6 +23,7 @@ from drake_sim.systems.estimation.amcl import (
     load_amcl_config,
 )
 from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig
+from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
 from drake_sim.systems.sensors.lidar import LidarConfig
 from drake_sim.worlds.arena import Arena, BoxSpec, CylinderSpec, ObstacleSpec, check_arena
 
@@ -62,6 +64,10 @@ class NavigationScenario:
         default_factory=lambda: load_amcl_config(default_amcl_config_file())
     )
     navigator: NavigatorConfig = dc.field(default_factory=NavigatorConfig)
+    # With no saved map (navigate without --map): "slam", the live SLAM's pose (its map starts
+    # empty at the start pose), or "odometry", the wheel odometry's alone.
+    no_map_localization: str = "slam"
+    slam: SlamConfig = dc.field(default_factory=SlamConfig)  # as mapping's (no map only)
     drive_rate: float = 100.0  # Hz, the wheel velocity loops (limits: the robot's).
     plant: MultibodyPlantConfig = dc.field(
         default_factory=lambda: MultibodyPlantConfig(
@@ -77,6 +83,10 @@ class NavigationScenario:
     random_seed: int = 0  # Odometry errors, lidar noise, AMCL.
 
 
+NO_MAP_LOCALIZATION = ("slam", "odometry")
+"""How the robot localises when navigating with no saved map."""
+
+
 def check_navigation_scenario(
     scenario: NavigationScenario, where: str = "scenario"
 ) -> NavigationScenario:
@@ -84,6 +94,12 @@ def check_navigation_scenario(
     check_lidar_robot_scenario(scenario, where)
     check_amcl_config(scenario.amcl, where, prefix="amcl.")
     check_navigator_config(scenario.navigator, f"{where}: navigator")
+    if scenario.no_map_localization not in NO_MAP_LOCALIZATION:
+        raise ConfigError(
+            f"{where}: 'no_map_localization' must be one of {', '.join(NO_MAP_LOCALIZATION)}, "
+            f"got {scenario.no_map_localization!r}"
+        )
+    scenario.slam.check(f"{where}: slam")
     keys = ("goal_time_factor", "goal_time_margin", "view_period")
     require_positive(where, fields_of(scenario, keys))
     return scenario

@@ -22,6 +22,11 @@ What is mapped (to the scenario's keys, ``--set``'s names):
 * DWA (ROS 1) and DWB (nav2, only when ``FollowPath`` is DWB: MPPI's keys mean other things)
   -> ``navigator.controller.*``: speed and acceleration limits, ``sim_time``, samples, the
   scoring biases, the goal checker's tolerances, ``controller_frequency``;
+* the local planner: move_base's ``base_local_planner`` (``teb_local_planner/TebLocalPlannerROS``
+  or DWA's) or nav2's ``FollowPath`` plugin -> ``navigator.local_planner`` (``teb``, ``dwa``);
+  ``TebLocalPlannerROS``'s keys -> ``navigator.teb.*`` (``TebConfig``: ``dt_ref``,
+  ``min_obstacle_dist``, the weights, ...), its limits and tolerances ->
+  ``navigator.controller.*`` (``max_vel_x_backwards`` as ``min_vel_x``, negated);
 * NavFn and GlobalPlanner -> ``navigator.planner.*``: ``tolerance``, ``use_astar`` (or
   ``use_dijkstra``, inverted), ``allow_unknown``, ``neutral_cost``, ``cost_factor``,
   ``lethal_cost``.
@@ -49,6 +54,7 @@ import yaml
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
 from drake_sim.navigation.costmap import footprint_radii
+from drake_sim.navigation.teb_planner import TebConfig
 from drake_sim.systems.estimation.amcl_config import AmclConfig
 
 _log = logging.getLogger(__name__)
@@ -97,7 +103,15 @@ _PLANNER = {
     "lethal_cost": "lethal_cost",
 }
 """NavFn / GlobalPlanner keys -> ``navigator.planner`` keys (``use_dijkstra`` is inverted)."""
-_LOCAL_PLANNERS = ("DWAPlannerROS", "TrajectoryPlannerROS", "FollowPath", "move_base")
+_TEB = {f.name for f in fields(TebConfig)}
+"""teb_local_planner's keys -> ``navigator.teb`` keys (its limits are the controller's)."""
+_LOCAL_PLANNERS = (
+    "DWAPlannerROS",
+    "TrajectoryPlannerROS",
+    "TebLocalPlannerROS",
+    "FollowPath",
+    "move_base",
+)
 _GLOBAL_PLANNERS = ("GlobalPlanner", "NavfnROS", "GridBased")
 
 
@@ -165,6 +179,19 @@ def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
     node's parameters (nav2: ``node`` its names; ROS 1: empty, namespaces in the keys)."""
     mapped, ignored = {}, []
     for path, value in _flat(params):
+        plugin = path[-1] == "plugin" and "FollowPath" in (*node, *path)
+        if path[-1] == "base_local_planner" or plugin:  # move_base's choice, nav2's plugin
+            name = str(value).lower()
+            if "teb" in name:
+                mapped["local_planner"] = "teb"
+            elif "dwa" in name or "dwb" in name or "trajectoryplanner" in name:
+                mapped["local_planner"] = "dwa"
+            else:
+                ignored.append(".".join(path))
+            continue
+        if path[-1] == "max_vel_x_backwards" and "TebLocalPlannerROS" in (*node, *path):
+            mapped["controller.min_vel_x"] = -abs(float(value))
+            continue
         if path[-1] == "footprint" and not set(path[:-1]) - {"local_costmap", "global_costmap"}:
             footprint = _footprint(value, where)
             if footprint:  # nav2's "[]" is none: robot_radius then
@@ -189,6 +216,8 @@ def _target(path: tuple, params: dict) -> tuple[str, str] | None:
     scope = set(path[:-1])
     if key == "controller_frequency":  # move_base's and controller_server's
         return "controller", key
+    if "TebLocalPlannerROS" in scope and key in _TEB:
+        return "teb", key
     if scope & {"controller_server", *_LOCAL_PLANNERS} and key in _CONTROLLER:
         follow = params.get("FollowPath", {})
         if "FollowPath" in scope and "dwb" not in str(follow.get("plugin", "dwb")).lower():

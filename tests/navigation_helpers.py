@@ -1,6 +1,8 @@
 """Shared by the navigation tests: maps saved from the arenas' ground truth (what a perfect
 mapping run would save) or by a mapping run, the robot and the scenario."""
 
+import json
+
 import numpy as np
 
 from drake_sim.base.map_files import OccupancyMap, load_map, save_map
@@ -43,3 +45,20 @@ def saved_slam_map(name: str, folder, seed: int = 0) -> tuple[OccupancyMap, obje
 
 def pose_deg(x: float, y: float, yaw_deg: float) -> np.ndarray:
     return np.array([x, y, np.radians(yaw_deg)])
+
+
+def navigate_to_goals(args, folder) -> dict:
+    """Runs ``python -m drake_sim.navigate --headless ARGS`` in this process, asserts every
+    goal was reached within 5 cm and 5 degrees of the truth with no collision, and returns the
+    report."""
+    import drake_sim.navigate as navigate  # noqa: PLC0415 (the app, only for these tests)
+    from drake_sim.base import cli  # noqa: PLC0415
+
+    report_file = folder / "report.json"
+    code = cli.run(navigate.main, ["--headless", *args, "--report", str(report_file)])
+    assert code == 0
+    report = json.loads(report_file.read_text())
+    assert report["reached_all"] and report["collisions"] == 0
+    for goal in report["goals"]:
+        assert goal["position_error_m"] < 0.05 and goal["yaw_error_deg"] < 5.0, goal
+    return report

@@ -3,13 +3,15 @@
 Each control cycle (``controller_frequency``) ``DwaPlanner.compute`` turns the robot's pose,
 its measured velocity, the global path, the goal and the (local) costmap into a ``cmd_vel``:
 
-1. Near the goal it drives the last stretch with a go-to-point law that slows down in
-   proportion to the distance left (and may back up a few centimetres after an overshoot),
-   aiming at ``goal_precision`` times ``xy_goal_tolerance``; once there (or within the
-   tolerance with the goal point off to the side) it turns on the spot to the goal's yaw, and
-   reports ``arrived`` (zero command) once the yaw is within ``goal_precision`` times
-   ``yaw_goal_tolerance``. The tolerances are what the acceptance measures, so aiming inside
-   them leaves room for the wheel controller's lag and the localisation's noise.
+1. Near the goal it drives the last stretch with a go-to-point law that slows down in proportion
+   to the distance left (and may back up a few centimetres after an overshoot), aiming at
+   ``goal_precision`` times ``xy_goal_tolerance``; once there (or within the tolerance with the
+   goal point off to the side) it turns on the spot to the goal's yaw, and reports ``arrived``
+   (zero command) once the yaw is within ``goal_precision`` times ``yaw_goal_tolerance`` and the
+   robot has stopped (measured turn rate at most ``min_vel_theta``, speed at most
+   ``min_approach_vel``: a fast turn would carry it on). The tolerances are what the acceptance
+   measures, so aiming inside them leaves room for the wheel controller's lag and the
+   localisation's noise.
 2. When the path ahead (the "carrot", ``lookahead_distance`` along it) lies more than
    ``rotate_to_heading_angle`` off the robot's heading it turns on the spot first (like nav2's
    rotation shim), so it never swings wide into a wall.
@@ -27,19 +29,10 @@ its measured velocity, the global path, the goal and the (local) costmap into a 
    is commanded; with none valid the status is ``no_valid_trajectory`` and the command is
    zero (the navigator then runs its recovery behaviours).
 
-Why a DWA and not a timed-elastic-band optimisation (measured on this 2-core VM): one DWA cycle
-(10 x 21 samples, 15 steps each, vectorised numpy) costs 0.2 to 1.5 ms, and driving a
-kinematic unicycle with a 0.05 s velocity lag to 10 random goals (seed 1) in each shipped
-arena it reached every one within 0.013 m and 3 degrees, keeping the robot's centre at least
-0.28 m from every wall, in 1.2 to 2.1 times the path length over 0.26 m/s (2.65 for a 0.4 m
-path, mostly turning on the spot); in the full simulation (``python -m drake_sim.navigate``,
-AMCL, physics) the room's four goals were reached within 0.043 m and 6.2 degrees of the true
-pose, most of it the localisation's error. A TEB-like ``MathematicalProgram`` over
-15 poses (unicycle dynamics as constraints, velocity and acceleration bounds, clearance
-constraints to just 8 obstacle points, a warm start) took 7 ms to build and solve with SNOPT
-and 31 ms with IPOPT (10 to 100 times a DWA cycle), growing with the obstacle points, and it
-needs a feasible warm start near obstacles. The DWA already meets the goal tolerances with
-margin, so it was kept (the TEB was a timing sketch only, not shipped).
+The DWA is the default. A timed-elastic-band planner (``teb_planner``, the navigator's
+``local_planner: teb``) replaces step 3 with an optimised band of poses and time intervals and
+keeps steps 1 and 2; it costs some tens of milliseconds a cycle against the DWA's 0.2 to 1.5 ms
+(the benchmarks compare the two).
 
 Units: m, rad, s; poses are ``[x, y, yaw]`` in the map frame.
 """
@@ -223,6 +216,11 @@ class DwaPlanner:
         heading = float(wrap_angle(math.atan2(carrot[1] - pose[1], carrot[0] - pose[0]) - pose[2]))
         if abs(heading) > c.rotate_to_heading_angle:
             return self._turn(pose, v0, w0, heading, "following", costmap)
+        return self._follow(pose, v0, w0, path[nearest:], local, carrot, costmap)
+
+    def _follow(self, pose, v0, w0, ahead, local, carrot, costmap) -> LocalCommand:
+        """Following the path (``ahead``: the dense path from its nearest point; ``local``:
+        up to the ``carrot``): the sampled rollouts (``teb_planner`` optimises a band)."""
         return self._sample(pose, v0, w0, local, carrot, costmap)
 
     def _limit(self, v0, w0, v, omega) -> tuple[float, float]:
@@ -259,7 +257,11 @@ class DwaPlanner:
         c = self.config
         error = float(wrap_angle(goal_yaw - pose[2]))
         if abs(error) <= c.goal_precision * c.yaw_goal_tolerance:
-            return LocalCommand(0.0, 0.0, pose[None, :].copy(), "arrived")
+            if abs(w0) <= c.min_vel_theta and abs(v0) <= c.min_approach_vel:
+                return LocalCommand(0.0, 0.0, pose[None, :].copy(), "arrived")
+            # Still moving (a fast turn ends here): stop first, arrive once stopped (a turn
+            # that stops past the tolerance is corrected by the next cycles).
+            return LocalCommand(0.0, 0.0, pose[None, :].copy(), "rotating_to_goal")
         return self._turn(pose, v0, w0, error, "rotating_to_goal", costmap)
 
     def _passable(self, costs, xy, pose, costmap) -> np.ndarray:

@@ -46,6 +46,7 @@ from drake_sim.navigation.recovery import (
     start_behaviour,
     step_behaviour,
 )
+from drake_sim.navigation.teb_planner import TebConfig, TebPlanner, check_teb_config
 from drake_sim.systems.estimation.slam import NO_SCAN, SCAN_DELAY
 from drake_sim.systems.sensors.lidar import LaserScan
 
@@ -60,6 +61,19 @@ class NavigatorConfig:
     controller: DwaConfig = dc.field(default_factory=DwaConfig)
     recovery: RecoveryConfig = dc.field(default_factory=RecoveryConfig)
     replan_period: float = 2.0  # s between replans while following (0: never on a timer).
+    # The local planner: "dwa" (sampled, ``controller``) or "teb" (a timed elastic band,
+    # ``teb``, with the controller's limits, tolerances and final approach).
+    local_planner: str = "dwa"
+    teb: TebConfig = dc.field(default_factory=TebConfig)
+    # From no first guess (global localisation), the robot turns on the spot at
+    # localization_spin rad/s until the localisation has settled (its ``localized`` input) or
+    # localization_timeout s have passed, then drives to its goals, as nav2 users spin first.
+    localization_spin: float = 0.8
+    localization_timeout: float = 30.0
+
+
+LOCAL_PLANNERS = ("dwa", "teb")
+"""The local planners ``NavigatorConfig.local_planner`` names."""
 
 
 def check_navigator_config(config: NavigatorConfig, where: str = "navigator") -> NavigatorConfig:
@@ -69,6 +83,18 @@ def check_navigator_config(config: NavigatorConfig, where: str = "navigator") ->
     check_global_planner_config(config.planner, where, prefix="planner.")
     check_dwa_config(config.controller, where, prefix="controller.")
     check_recovery_config(config.recovery, where, prefix="recovery.")
+    check_teb_config(config.teb, where, prefix="teb.")
+    if config.local_planner not in LOCAL_PLANNERS:
+        raise ConfigError(
+            f"{where}: 'local_planner' must be one of {', '.join(LOCAL_PLANNERS)}, "
+            f"got {config.local_planner!r}"
+        )
+    for name in ("localization_spin", "localization_timeout"):
+        value = getattr(config, name)
+        if isinstance(value, bool) or not (isinstance(value, int | float) and value > 0):
+            raise ConfigError(f"{where}: '{name}' must be a number > 0, got {value!r}")
+        if not math.isfinite(value):
+            raise ConfigError(f"{where}: '{name}' must be finite, got {value!r}")
     if not (math.isfinite(config.replan_period) and config.replan_period >= 0):
         raise ConfigError(
             f"{where}: 'replan_period' must be finite and >= 0, got {config.replan_period!r}"
@@ -91,13 +117,17 @@ class Navigator(LeafSystem):
         - pose
         - twist
         - scan
+        - localized (optional)
         output_ports:
         - cmd_vel
         - status
 
     ``pose`` is the robot's ``[x, y, yaw]`` (m, m, rad) in the map frame (the localisation's
     estimate); ``twist`` its measured ``[v, omega]`` (m/s, rad/s, from the odometry); ``scan``
-    the lidar's ``LaserScan``, the lidar at ``X_base_sensor`` = (x, y, yaw) on the base.
+    the lidar's ``LaserScan``, the lidar at ``X_base_sensor`` = (x, y, yaw) on the base;
+    ``localized`` (1 or 0, AMCL's) is read only with ``localize_first``: the robot then turns on
+    the spot ("localizing") until it is 1 (or unconnected) or ``localization_timeout`` has
+    passed, before its goals.
     ``cmd_vel`` is ``[v, omega]`` for the ``DiffDriveController``; ``status`` a
     ``NavigationStatus``. Updated every 1 / ``controller_frequency`` s, ``SCAN_DELAY`` after
     the tick (so a scan taken at the tick is seen by it).
@@ -110,14 +140,21 @@ class Navigator(LeafSystem):
         config: NavigatorConfig,
         X_base_sensor=(0.0, 0.0, 0.0),
         goals=(),
+        localize_first: bool = False,
     ):
         super().__init__()
         self._config = check_navigator_config(config)
-        self._dwa = DwaPlanner(config.controller)
+        if config.local_planner == "teb":
+            self._dwa = TebPlanner(config.controller, config.teb)
+        else:
+            self._dwa = DwaPlanner(config.controller)
         self._X_base_sensor = np.array(X_base_sensor, dtype=float).reshape(3)
         goals = [_check_goal(g) for g in goals]
         model = NavState(Costmap.from_map(map, config.costmap), goals)
+        if localize_first:
+            model.state = "localizing"
         self._pose = self.DeclareVectorInputPort("pose", 3)
+        self._localized = self.DeclareVectorInputPort("localized", 1)
         self._twist = self.DeclareVectorInputPort("twist", 2)
         self._scan = self.DeclareAbstractInputPort("scan", AbstractValue.Make(NO_SCAN))
         self._state = self.DeclareAbstractState(AbstractValue.Make(model))
@@ -173,6 +210,14 @@ class Navigator(LeafSystem):
         if s.goal is not None and s.last_xy is not None:
             s.driven += math.hypot(*(pose[:2] - s.last_xy))
         s.last_xy = pose[:2].copy()
+        if s.state == "localizing":
+            settled = not self._localized.HasValue(context) or self._localized.Eval(context)[0]
+            if settled or t >= self._config.localization_timeout:
+                s.state = "idle"
+            else:
+                s.command = np.array([0.0, self._config.localization_spin])
+                state.get_mutable_abstract_state(self._state).set_value(s)
+                return
         if s.goal is None and s.queue:
             self._start_goal(s, t, pose)
         elif s.state == "recovering":

@@ -16,7 +16,7 @@ import numpy as np
 from drake_sim.navigation.costmap import Costmap
 from drake_sim.navigation.recovery import StuckMonitor
 
-STATES = ("idle", "planning", "following", "recovering", "arrived", "failed")
+STATES = ("idle", "localizing", "planning", "following", "recovering", "arrived", "failed")
 
 
 @dc.dataclass

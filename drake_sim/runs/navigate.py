@@ -128,10 +128,13 @@ def _m(value) -> str:
     return "n/a" if value is None else f"{value:.3f} m"
 
 
-def check_pose(values, what: str, occupancy_map: OccupancyMap) -> np.ndarray:
-    """``[x, y, yaw_deg]`` from the command line as ``[x, y, yaw_rad]``: finite, on the map."""
+def check_pose(values, what: str, occupancy_map: OccupancyMap | None) -> np.ndarray:
+    """``[x, y, yaw_deg]`` from the command line as ``[x, y, yaw_rad]``: finite, on the map
+    (when there is one)."""
     if not all(math.isfinite(v) for v in values):
         raise ConfigError(f"{what}: every value must be a finite number, got {list(values)}")
+    if occupancy_map is None:
+        return np.array([values[0], values[1], math.radians(values[2])])
     rows, cols = occupancy_map.cell_of(np.array([values[:2]]))
     if not occupancy_map.inside(rows, cols)[0]:
         raise ConfigError(f"{what}: ({values[0]}, {values[1]}) is outside the map")
@@ -159,21 +162,28 @@ def _goals(options, arena, arena_file: Path, occupancy_map, interactive: bool, s
 
 
 def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> NavigateRun:
-    """The recipe's run. ``options``: ``map`` (map_server YAML; default the arena's ground
-    truth at the lidar's height, what a perfect mapping run saves; with a ``start`` and no
-    world named, also the world the robot drives in), ``goal`` ([x, y, yaw_deg]),
+    """The recipe's run. ``options``: ``map`` (map_server YAML; with a ``start`` and no world
+    named, also the world the robot drives in; without one, the command line navigates with no
+    prior map, on the live SLAM and what the lidar sees, while a caller's dict gets the arena's
+    ground truth at the lidar's height, what a perfect mapping run saves, unless ``no_map``),
+    ``goal`` ([x, y, yaw_deg]),
     ``goals`` (a goals file, a number of random goals, or a list of ``[x, y, yaw_rad]``),
     ``initial_pose`` (AMCL's first
     guess, [x, y, yaw_deg]; default the true start), ``global_localization``; with a viewer and
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
     map_file = recipe.option(options, "map")
+    # No saved map: the command line navigates with none (as move_base and nav2 can); a
+    # caller's dict gets the arena's ground truth unless it asks for none (``no_map``).
+    no_map = not map_file and recipe.option(options, "no_map", not isinstance(options, dict))
     own_world = map_file and not scenario.world and not _arena_named(options)
     if own_world and scenario.start:  # --map and --start, no arena: the map is the world
         scenario = dc.replace(scenario, world=str(map_file))
     arena_file, arena, world_map = load_world(scenario)
     if map_file:
         occupancy_map = load_map(map_file)
+    elif no_map:
+        occupancy_map = None
     else:
         occupancy_map = arena_grid(arena, GROUND_TRUTH_RESOLUTION, height=robot.scan_height)
     world = world_arena(
@@ -200,6 +210,11 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
                 hint = "to drive in the map's own world: --world MAP --start X Y YAW"
             raise ConfigError(f"{e} ({hint})") from None
     global_localization = bool(recipe.option(options, "global_localization", False))
+    if no_map and (global_localization or recipe.option(options, "initial_pose") is not None):
+        raise ConfigError(
+            "--initial-pose and --global-localization are AMCL's: give the map it localises "
+            "on with --map (without one the live SLAM localises the robot)"
+        )
     estimate = None
     if recipe.option(options, "initial_pose") is not None:
         guess = recipe.option(options, "initial_pose")
@@ -248,7 +263,9 @@ RECIPE = AppRecipe(
     seed_key="random_seed",
     make_run=make_run,
     flags=(
-        recipe.file_flag("--map", "map file", "map .yaml", required=True),
+        recipe.file_flag(
+            "--map", "map file", "map .yaml (none: no prior map, the live SLAM and the lidar alone)"
+        ),
         ARENA_FLAG,
         WORLD_FLAG,
         START_FLAG,

@@ -23,6 +23,7 @@ from pydrake.geometry import Meshcat
 from diagrams.lidar_robot import ROBOT_NAME
 from diagrams.navigation import make_navigation_diagram
 from diagrams.navigation_scenario import NavigationScenario
+from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
 from drake_sim.base.planar import wrap_angle, wrap_angle_exact
 from drake_sim.base.report import RunReport, run_times
@@ -110,8 +111,10 @@ class NavigationRun(SimulationRun):
 
     AMCL starts from ``initial_estimate`` (``[x, y, yaw]``, with ``initial_covariance`` or
     the AMCL config's), by default the true ``start``; with ``global_localization`` from
-    particles over the whole map instead. The scenario's ``random_seed`` seeds the odometry
-    errors, the lidar noise and AMCL.
+    particles over the whole map instead. With no ``occupancy_map`` there is no AMCL: the
+    robot localises with the live SLAM (or its odometry) and plans on what its lidar has seen
+    (``diagrams.navigation``). The scenario's ``random_seed`` seeds the odometry errors, the
+    lidar noise and AMCL.
     """
 
     check_period = CHECK_PERIOD
@@ -123,7 +126,7 @@ class NavigationRun(SimulationRun):
         scenario: NavigationScenario,
         robot: Turtlebot3Params,
         world: Arena,
-        occupancy_map: OccupancyMap,
+        occupancy_map: OccupancyMap | None,
         *,
         start,
         goals=(),
@@ -152,7 +155,7 @@ class NavigationRun(SimulationRun):
         )
         super().__init__(diagram, scenario.random_seed, realtime=realtime)
         self.navigator = self.diagram.GetSubsystemByName("navigator")
-        self.amcl = self.diagram.GetSubsystemByName("amcl")
+        self.amcl = None if occupancy_map is None else self.diagram.GetSubsystemByName("amcl")
         self._plant = self.diagram.GetSubsystemByName("plant")
         self._scene_graph = self.diagram.GetSubsystemByName("scene_graph")
         self._robot_geometries = self._geometries_of(ROBOT_NAME)
@@ -214,12 +217,17 @@ class NavigationRun(SimulationRun):
         ``covariance`` (3 x 3) or the AMCL config's initial one."""
         config = self.scenario.amcl
         covariance = config.initial_covariance() if covariance is None else covariance
-        amcl_context = self.amcl.GetMyContextFromRoot(self.context)
+        amcl_context = self._amcl_context()
         self.amcl.set_pose(amcl_context, np.asarray(pose, dtype=float), np.asarray(covariance))
+
+    def _amcl_context(self):
+        if self.amcl is None:
+            raise ConfigError("no AMCL without a map: the live SLAM (or odometry) localises")
+        return self.amcl.GetMyContextFromRoot(self.context)
 
     def start_global_localization(self) -> None:
         """Spreads AMCL's particles over the map's free space (ROS's global_localization)."""
-        self.amcl.start_global_localization(self.amcl.GetMyContextFromRoot(self.context))
+        self.amcl.start_global_localization(self._amcl_context())
 
     # --- bookkeeping ---------------------------------------------------------------------
 

@@ -85,6 +85,7 @@ def test_nav2_names_become_the_scenario_amcl_keys(tmp_path, caplog):
         "amcl.initial_pose_y": "-0.5",
         "amcl.initial_pose_a": "0.25",
         "navigator.controller.controller_frequency": "15.0",
+        "navigator.local_planner": '"dwa"',  # FollowPath's plugin: DWB
         "navigator.controller.xy_goal_tolerance": "0.08",
         "navigator.controller.max_vel_x": "0.26",
         "navigator.costmap.local_width": "4",
@@ -205,3 +206,26 @@ def test_real_parameter_files_load_into_the_scenario(name):
     assert scenario.amcl.min_particles >= 1
     if name.endswith("move_base_params.yaml"):  # move_base's own key, at the top level
         assert "navigator.controller.controller_frequency=10.0" in mut.ros_overrides(path)
+
+
+def test_move_base_with_teb_chooses_it_and_maps_its_keys(tmp_path):
+    """The workshop's move_base: global_planner with teb_local_planner."""
+    text = "base_local_planner: teb_local_planner/TebLocalPlannerROS\n"
+    text += "TebLocalPlannerROS:\n  max_vel_x: 0.2\n  max_vel_x_backwards: 0.15\n"
+    text += "  min_obstacle_dist: 0.1\n  dt_ref: 0.25\n  weight_obstacle: 40\n"
+    text += "  xy_goal_tolerance: 0.04\n  enable_homotopy_class_planning: true\n"
+    overrides = mut.ros_overrides(write(tmp_path, "teb.yaml", text))
+    assert overrides == [
+        'navigator.local_planner="teb"',
+        "navigator.controller.max_vel_x=0.2",
+        "navigator.controller.min_vel_x=-0.15",
+        "navigator.teb.min_obstacle_dist=0.1",
+        "navigator.teb.dt_ref=0.25",
+        "navigator.teb.weight_obstacle=40",
+        "navigator.controller.xy_goal_tolerance=0.04",
+    ]
+    scenario = load_navigation_scenario(default_scenario_file(), [f"params=[{tmp_path}/teb.yaml]"])
+    assert scenario.navigator.local_planner == "teb"
+    assert scenario.navigator.teb.dt_ref == 0.25
+    dwa = "base_local_planner: dwa_local_planner/DWAPlannerROS\n"
+    assert mut.ros_overrides(write(tmp_path, "dwa.yaml", dwa)) == ['navigator.local_planner="dwa"']

@@ -192,3 +192,20 @@ def test_bad_world_options_are_one_line_and_exit_2(room_map, args, needle):
     names = {"MAP": str(room_map), "ROOM": str(nh.arena_file("room"))}
     args = [names.get(a, a) for a in args]
     assert_bad_input(_run("--map", str(room_map), "--goal", "0", "-1", "0", *args), needle)
+
+
+def test_with_no_map_the_robot_maps_as_it_goes(tmp_path):
+    """No ``--map`` (as BARN's move_base runs): the live SLAM localises, the costmap fills from
+    the lidar, the goal is reached with the true error in tolerance."""
+    report = nh.navigate_to_goals(["--goal", "0", "-1", "90"], tmp_path)
+    assert report["localization_error_max_m"] < 0.05
+
+
+@pytest.mark.parametrize("flag", [["--initial-pose", "0", "0", "0"], ["--global-localization"]])
+def test_amcl_flags_without_a_map_are_one_line_and_exit_2(flag):
+    assert_bad_input(_run("--goal", "0", "-1", "90", *flag), "give the map it localises on")
+
+
+def test_teb_as_the_local_planner_reaches_the_goal(room_map, tmp_path):
+    args = ["--map", str(room_map), "--goal", "2.0", "-0.1", "0"]
+    nh.navigate_to_goals([*args, "--set", "navigator.local_planner=teb"], tmp_path)

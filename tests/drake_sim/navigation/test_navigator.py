@@ -267,3 +267,41 @@ def test_load_navigator_config(tmp_path):
     path.write_text("recovery: {backup_speed: -0.1}\n")
     with pytest.raises(ConfigError, match=r"nav.yaml.*recovery.backup_speed"):
         mut.load_navigator_config(path)
+
+
+def _localizing(config, localized: float | None):
+    """A navigator that localises first, its inputs fixed (``localized`` None: unconnected)."""
+    arena = _arena("room")
+    dut = mut.Navigator(
+        map=arena_grid(arena, 0.05), config=config, goals=[[0.0, -1.0, 0.0]], localize_first=True
+    )
+    simulator = Simulator(dut)
+    context = simulator.get_mutable_context()
+    dut.GetInputPort("pose").FixValue(context, [-2.2, -1.8, 0.0])
+    dut.GetInputPort("twist").FixValue(context, [0.0, 0.0])
+    dut.GetInputPort("scan").FixValue(context, AbstractValue.Make(NO_SCAN))
+    if localized is not None:
+        dut.GetInputPort("localized").FixValue(context, [localized])
+    return dut, simulator
+
+
+def test_from_no_guess_it_spins_until_localised_then_drives():
+    config = mut.NavigatorConfig()
+    dut, simulator = _localizing(config, 0.0)
+    simulator.AdvanceTo(1.0)
+    context = simulator.get_context()
+    assert dut.GetOutputPort("status").Eval(context).state == "localizing"
+    assert dut.GetOutputPort("cmd_vel").Eval(context) == pytest.approx([0.0, 0.8])
+    dut.GetInputPort("localized").FixValue(simulator.get_mutable_context(), [1.0])
+    simulator.AdvanceTo(1.3)
+    assert dut.GetOutputPort("status").Eval(context).state == "following"
+
+
+def test_localising_ends_at_its_timeout_or_with_no_input():
+    config = mut.NavigatorConfig(localization_timeout=0.5)
+    dut, simulator = _localizing(config, 0.0)
+    simulator.AdvanceTo(0.8)
+    assert dut.GetOutputPort("status").Eval(simulator.get_context()).state == "following"
+    dut, simulator = _localizing(mut.NavigatorConfig(), None)
+    simulator.AdvanceTo(0.3)
+    assert dut.GetOutputPort("status").Eval(simulator.get_context()).state == "following"

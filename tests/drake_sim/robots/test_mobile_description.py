@@ -9,8 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import drake_sim.navigate as navigate
-from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.robots.turtlebot3_params import load_turtlebot3_params
 from tests import navigation_helpers as nh
@@ -106,19 +104,12 @@ def test_mistakes_are_one_clear_error(tmp_path, change, needle):
     assert needle in str(info.value) and "little.yaml" in str(info.value)
 
 
-def test_the_described_robot_drives_to_a_goal(tmp_path, capsys):
+def test_the_described_robot_drives_to_a_goal(tmp_path):
     """The little robot (its own wheels, casters and lidar height) navigates in the room."""
     _, room_map = nh.saved_truth_map("room", tmp_path)
-    report_file = tmp_path / "report.json"
     robot = write_robot(tmp_path, right_roll="1.5707963")  # a wheel turning the other way too
-    args = ["--headless", "--robot", str(robot), "--map", str(room_map)]
-    args += ["--goal", "0", "-1", "90", "--report", str(report_file)]
-    code = cli.run(navigate.main, args)
-    assert code == 0, capsys.readouterr().err
-    report = json.loads(report_file.read_text())
-    assert report["reached_all"] and report["collisions"] == 0
-    goal = report["goals"][0]
-    assert goal["position_error_m"] < 0.05 and goal["yaw_error_deg"] < 5.0
+    args = ["--robot", str(robot), "--map", str(room_map), "--goal", "0", "-1", "90"]
+    nh.navigate_to_goals(args, tmp_path)
 
 
 def real_waffle(tmp_path, variant: str) -> Path:
