@@ -249,7 +249,7 @@ class DwaPlanner:
         speed = max(speed, c.min_vel_theta)
         v, omega = self._limit(v0, w0, 0.0, math.copysign(speed, error))
         trajectory = self._trajectory(pose, v, omega)
-        if costmap is not None and not _outline_clear(trajectory[None, 1:], costmap)[0]:
+        if costmap is not None and not outline_clear(trajectory[None, 1:], costmap)[0]:
             return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
         return LocalCommand(v, omega, trajectory, status)
 
@@ -285,7 +285,7 @@ class DwaPlanner:
         if not np.all(self._passable(costmap.cost_at(line), line, pose, costmap)):
             return None
         ahead = np.column_stack([line, np.full(len(line), pose[2])])
-        if not _outline_clear(ahead[None], costmap)[0]:
+        if not outline_clear(ahead[None], costmap)[0]:
             return None
         backwards = abs(bearing) > math.pi / 2 and distance <= 3 * c.xy_goal_tolerance
         error = float(wrap_angle(bearing - math.pi)) if backwards else bearing
@@ -311,7 +311,7 @@ class DwaPlanner:
         cost = costmap.cost_at(poses[..., :2]).astype(float)
         valid = np.all(self._passable(cost, poses[..., :2], pose, costmap), axis=1)
         valid &= cost[:, -1] < INSCRIBED  # an escape must get out
-        valid &= _outline_clear(poses, costmap)
+        valid &= outline_clear(poses, costmap)
         if not np.any(valid):
             return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
         poses, cost, vs, ws = poses[valid], cost[valid], vs[valid], ws[valid]
@@ -331,7 +331,7 @@ class DwaPlanner:
         return LocalCommand(float(vs[best]), float(ws[best]), trajectory, "following")
 
 
-def _outline_clear(poses: np.ndarray, costmap) -> np.ndarray:
+def outline_clear(poses: np.ndarray, costmap) -> np.ndarray:
     """For each rollout of ``poses`` (m, steps, 3): True when the costmap's footprint polygon
     (``CostmapConfig.footprint``; none: the circle, checked by the centre's cost) touches no
     LETHAL cell at any of its poses, as DWB's footprint check does."""

@@ -24,9 +24,10 @@ DWA's, ``local_planner``):
 3. the command: the first interval's forward speed and turn rate, within the DWA's limits and
    dynamic window; the band is the predicted trajectory.
 
-A band whose first ``feasibility_check_no_poses`` poses (or the command's own rollout) would
-touch an obstacle is not driven: that cycle falls back to the sampled DWA (teb_local_planner
-would ask for a recovery instead; the DWA's valid rollouts are the safer choice here).
+A band whose first ``feasibility_check_no_poses`` poses (or the command's own rollout, with the
+costmap's footprint polygon where it has one) would touch an obstacle is not driven: that cycle
+falls back to the sampled DWA (teb_local_planner would ask for a recovery instead; the DWA's
+valid rollouts are the safer choice here).
 
 Units: m, rad, s; poses are ``[x, y, yaw]`` in the map frame.
 """
@@ -41,7 +42,7 @@ from scipy.optimize import least_squares
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.planar import wrap_angle
 from drake_sim.navigation.costmap import LETHAL
-from drake_sim.navigation.local_planner import DwaConfig, DwaPlanner, LocalCommand
+from drake_sim.navigation.local_planner import DwaConfig, DwaPlanner, LocalCommand, outline_clear
 
 
 @dc.dataclass
@@ -147,8 +148,9 @@ class TebPlanner(DwaPlanner):
         v, omega = self._limit(v0, w0, max(v, 0.0), step[2] / intervals[0])
         trajectory = self._trajectory(pose, v, omega)
         clear = costmap.cost_at(trajectory[:, :2]) < LETHAL
-        if not (np.all(clear) and np.all(field.clearance(trajectory[:, :2]) > 0.0)):
-            return None
+        clear = np.all(clear) and np.all(field.clearance(trajectory[:, :2]) > 0.0)
+        if not (clear and outline_clear(trajectory[None, 1:], costmap)[0]):
+            return None  # a footprint polygon is checked as the DWA checks it
         return LocalCommand(v, omega, poses, "following")
 
 
