@@ -114,6 +114,8 @@ def traversal_costs(costmap: Costmap, config: GlobalPlannerConfig, start_xy=None
         row, col = int(math.floor(grid[1])), int(math.floor(grid[0]))
         r0, r1 = max(row - span, 0), min(row + span + 1, costs.shape[0])
         c0, c1 = max(col - span, 0), min(col + span + 1, costs.shape[1])
+        if r0 >= r1 or c0 >= c1:  # a start off the costmap (a lost estimate): no escape
+            return eff
         rr, cc = np.mgrid[r0:r1, c0:c1]
         near = np.hypot(cc + 0.5 - grid[0], rr + 0.5 - grid[1]) * costmap.resolution
         near_start = (near <= config.start_escape_radius) | ((rr == row) & (cc == col))

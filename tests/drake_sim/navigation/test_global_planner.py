@@ -225,6 +225,10 @@ def test_traversal_costs():
     assert no_unknown[65, 15] == -1
     escape = mut.traversal_costs(costmap, mut.GlobalPlannerConfig(), start_xy=(2.0, 2.25))
     assert escape[44, 40] == INSCRIBED and escape[40, 40] == -1 and escape[44, 60] == -1
+    # A start far off the costmap (a lost estimate): no escape cells, no error.
+    for far in ((-50.0, 2.0), (2.0, 90.0)):
+        off = mut.traversal_costs(costmap, mut.GlobalPlannerConfig(), start_xy=far)
+        assert np.array_equal(off, eff)
 
 
 @pytest.mark.parametrize(
