@@ -92,9 +92,10 @@ def make_navigation_diagram(
         estimate, covariance, particles = _no_map_estimate(
             builder, scenario, robot_parts, start, nav_map
         )
+        localized = None
     else:
         nav_map = occupancy_map
-        estimate, covariance, particles = _add_amcl(
+        estimate, covariance, particles, localized = _add_amcl(
             builder, scenario, occupancy_map, robot_parts,
             initial_estimate, initial_covariance, global_localization,
         )  # fmt: skip
@@ -105,14 +106,11 @@ def make_navigation_diagram(
             config=scenario.navigator,
             X_base_sensor=X_base_sensor,
             goals=list(goals),
-            localize_first=occupancy_map is not None and global_localization,
+            localize_first=localized is not None and global_localization,
         ),
     )
-    if occupancy_map is not None and global_localization:
-        builder.Connect(
-            builder.GetSubsystemByName("amcl").GetOutputPort("localized"),
-            navigator.GetInputPort("localized"),
-        )
+    if localized is not None and global_localization:
+        builder.Connect(localized, navigator.GetInputPort("localized"))
     builder.Connect(estimate, navigator.GetInputPort("pose"))
     builder.Connect(robot_parts.odometry_twist, navigator.GetInputPort("twist"))
     builder.Connect(robot_parts.scan, navigator.GetInputPort("scan"))
@@ -175,7 +173,7 @@ def _add_amcl(
     builder, scenario, occupancy_map, robot_parts, initial_estimate, initial_covariance,
     global_localization,
 ):  # fmt: skip
-    """AMCL on the saved map; its pose, covariance and particles outputs."""
+    """AMCL on the saved map; its pose, covariance, particles and localized outputs."""
     amcl = builder.AddNamedSystem(
         "amcl",
         Amcl(
@@ -195,6 +193,7 @@ def _add_amcl(
         amcl.GetOutputPort("pose"),
         amcl.GetOutputPort("covariance"),
         amcl.GetOutputPort("particles"),
+        amcl.GetOutputPort("localized"),
     )
 
 

@@ -47,10 +47,10 @@ def pose_deg(x: float, y: float, yaw_deg: float) -> np.ndarray:
     return np.array([x, y, np.radians(yaw_deg)])
 
 
-def navigate_to_goals(args, folder) -> dict:
+def navigate_to_goals(args, folder, *, position_m=0.05, yaw_deg=5.0) -> dict:
     """Runs ``python -m drake_sim.navigate --headless ARGS`` in this process, asserts every
-    goal was reached within 5 cm and 5 degrees of the truth with no collision, and returns the
-    report."""
+    goal was reached with no collision, within ``position_m`` and ``yaw_deg`` of the truth
+    (None: not asserted), and returns the report."""
     import drake_sim.navigate as navigate  # noqa: PLC0415 (the app, only for these tests)
     from drake_sim.base import cli  # noqa: PLC0415
 
@@ -60,5 +60,6 @@ def navigate_to_goals(args, folder) -> dict:
     report = json.loads(report_file.read_text())
     assert report["reached_all"] and report["collisions"] == 0
     for goal in report["goals"]:
-        assert goal["position_error_m"] < 0.05 and goal["yaw_error_deg"] < 5.0, goal
+        assert position_m is None or goal["position_error_m"] < position_m, goal
+        assert yaw_deg is None or goal["yaw_error_deg"] < yaw_deg, goal
     return report

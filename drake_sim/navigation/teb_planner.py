@@ -91,6 +91,7 @@ class TebPlanner(DwaPlanner):
     def __init__(self, config: DwaConfig, teb: TebConfig):
         super().__init__(config)
         self.teb = check_teb_config(teb)
+        self._structures: dict[int, tuple] = {}  # band size -> ``band_structure``
 
     def _follow(self, pose, v0, w0, ahead, local, carrot, costmap) -> LocalCommand:
         band = self._band(pose, ahead, costmap)
@@ -130,7 +131,11 @@ class TebPlanner(DwaPlanner):
         feasible."""
         poses, intervals = band
         field = _ClearanceField(costmap)
-        problem = _BandProblem(poses, v0, w0, self.config, self.teb, field)
+        n = len(poses)
+        if n not in self._structures:
+            self._structures[n] = band_structure(n)
+        structure = self._structures[n]
+        problem = _BandProblem(poses, v0, w0, self.config, self.teb, field, structure)
         result = least_squares(
             problem.residuals,
             problem.pack(poses, intervals),
@@ -186,15 +191,15 @@ class _BandProblem:
     """The band's least-squares problem: the inner poses and the intervals as one vector,
     the weighted soft constraints as residuals."""
 
-    def __init__(self, poses, v0, w0, dwa: DwaConfig, teb: TebConfig, field):
+    def __init__(self, poses, v0, w0, dwa: DwaConfig, teb: TebConfig, field, structure=None):
+        """``structure``: ``band_structure(len(poses))``, when the caller keeps it."""
         self.first, self.last = poses[0].copy(), poses[-1].copy()
         self.n = len(poses)
         self.v0, self.w0 = v0, w0
         self.dwa, self.teb, self.field = dwa, teb, field
         inner = 3 * (self.n - 2)
         self.dt_slice = slice(inner, inner + self.n - 1)
-        self._pattern = self.sparsity()
-        self._groups = _colour(self._pattern)
+        self._pattern, self._groups = structure or band_structure(self.n)
 
     def jacobian(self, x) -> np.ndarray:
         """The residuals' Jacobian by forward differences, the columns that share no residual
@@ -249,26 +254,33 @@ class _BandProblem:
     def sparsity(self) -> np.ndarray:
         """Which variables each residual depends on (``residuals``' order), (rows, columns)
         bool."""
-        n, k = self.n, self.n - 1  # poses, intervals
-        pose_cols = [[] if i in (0, n - 1) else list(range(3 * (i - 1), 3 * i)) for i in range(n)]
-        dt_col = [self.dt_slice.start + j for j in range(k)]
-        rows = []
-        rows += [[dt_col[j]] for j in range(k)]  # time
-        segment = [pose_cols[j] + pose_cols[j + 1] for j in range(k)]
-        rows += segment  # non-holonomic
-        rows += segment  # forward
-        rows += [segment[j] + [dt_col[j]] for j in range(k)] * 2  # v, omega
-        for _ in range(2):  # a, alpha: this interval and the one before
-            for j in range(k):
-                cols = segment[j] + [dt_col[j]]
-                if j:
-                    cols += segment[j - 1] + [dt_col[j - 1]]
-                rows.append(cols)
-        rows += [pose_cols[i] for i in range(1, n - 1)]  # obstacles
-        matrix = np.zeros((len(rows), self.dt_slice.stop), dtype=bool)
-        for r, cols in enumerate(rows):
-            matrix[r, cols] = True
-        return matrix
+        return self._pattern
+
+
+def band_structure(n: int) -> tuple[np.ndarray, list[np.ndarray]]:
+    """For a band of ``n`` poses: which variables each residual depends on (``_BandProblem``'s
+    order; rows x columns, bool) and the column groups that share no residual (``_colour``).
+    The same for every band of that size: ``TebPlanner`` makes it once per size."""
+    k = n - 1  # intervals
+    pose_cols = [[] if i in (0, n - 1) else list(range(3 * (i - 1), 3 * i)) for i in range(n)]
+    dt_col = [3 * (n - 2) + j for j in range(k)]
+    rows = []
+    rows += [[dt_col[j]] for j in range(k)]  # time
+    segment = [pose_cols[j] + pose_cols[j + 1] for j in range(k)]
+    rows += segment  # non-holonomic
+    rows += segment  # forward
+    rows += [segment[j] + [dt_col[j]] for j in range(k)] * 2  # v, omega
+    for _ in range(2):  # a, alpha: this interval and the one before
+        for j in range(k):
+            cols = segment[j] + [dt_col[j]]
+            if j:
+                cols += segment[j - 1] + [dt_col[j - 1]]
+            rows.append(cols)
+    rows += [pose_cols[i] for i in range(1, n - 1)]  # obstacles
+    pattern = np.zeros((len(rows), 3 * (n - 2) + k), dtype=bool)
+    for r, cols in enumerate(rows):
+        pattern[r, cols] = True
+    return pattern, _colour(pattern)
 
 
 def _colour(pattern: np.ndarray) -> list[np.ndarray]:

@@ -23,7 +23,6 @@ ros_control; Drake leaves them out) gets one actuator per wheel joint, limited t
 import dataclasses as dc
 import math
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Cylinder, SceneGraph, Sphere
@@ -69,12 +68,6 @@ class DescribedNumbers:
     lidar_mount: tuple[float, float, float]  # the lidar frame's origin in the base frame
 
 
-def drake_urdf(description: MobileDescription, *, warn: bool = True) -> Path:
-    """The description's Drake-ready URDF (rendered, meshes converted, cached); ``warn``:
-    missing visual meshes are a warning line (``robot_files.drake_urdf``)."""
-    return robot_files.drake_urdf(description, warn=warn)
-
-
 def add_described(
     plant: MultibodyPlant,
     description: MobileDescription,
@@ -85,8 +78,8 @@ def add_described(
 ) -> ModelInstanceIndex:
     """Adds the described robot to ``plant`` as the model ``name`` (a free base) with an
     actuator per wheel joint ([left, right], effort ``max_torque``) unless it has them;
-    ``warn``: as ``drake_urdf`` (loading the robot file has warned once)."""
-    urdf = drake_urdf(description, warn=warn)
+    ``warn``: as ``robot_files.drake_urdf`` (loading the robot file has warned once)."""
+    urdf = robot_files.drake_urdf(description, warn=warn)
     renamed = urdf.with_name(f"{urdf.stem}.as_{name}.urdf")  # beside it: its meshes' paths hold
     ET.register_namespace("drake", "http://drake.mit.edu")
     root = ET.parse(urdf).getroot()

@@ -75,9 +75,10 @@ class ClearanceGrid(NamedTuple):
     clear: np.ndarray
 
 
-def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | None:
-    """The table of body pair (a, b) (rows of ``h.speed``), or None when it cannot have one
-    (more than two joints, no finite box, no speed bound) or would not help (no cell above 0).
+def clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed) -> ClearanceGrid | None:
+    """The cells of body pair (a, b)'s table and their clearances (rows of ``h.speed``), or
+    None when it cannot have a table (more than two joints, no finite box, no speed bound);
+    ``table_of`` makes a cover's table of it.
 
     Args:
         d: the sphere model's ``KernelData`` (its kinematics).
@@ -87,13 +88,6 @@ def pair_table(d, h, rows, a, b, low, high, wrap, sphere_speed) -> PairTable | N
             where that is one turn of a revolute joint.
         sphere_speed: ``KernelData.speed`` (L, D), the spheres' speed bounds.
     """
-    grid = clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed)
-    return None if grid is None else table_of(grid, a, b, sphere_speed)
-
-
-def clearance_grid(d, h, rows, a, b, low, high, wrap, sphere_speed) -> ClearanceGrid | None:
-    """The cells of body pair (a, b)'s table and their clearances (``pair_table``'s
-    arguments), or None when it cannot have a table."""
     found = _joints(h, a, b, low, high, sphere_speed)
     if found is None:
         return None

@@ -130,28 +130,11 @@ def test_goals_from_the_page_with_a_viewer(room_map, tmp_path, monkeypatch, caps
     assert "1 goals given in the page, 1 reached" in capsys.readouterr().out
 
 
-def test_a_world_from_a_map_alone(room_map, tmp_path, capsys):
+def test_a_world_from_a_map_alone(room_map, tmp_path):
     """The room's saved map simulated as walls (``--world``), the robot placed by ``--start``:
     no arena file is read."""
-    report_file = tmp_path / "report.json"
-    args = ["--headless", "--map", str(room_map), "--world", str(room_map)]
-    args += [
-        "--start",
-        "-2.0",
-        "-1.5",
-        "0",
-        "--goal",
-        "0",
-        "-1",
-        "90",
-        "--report",
-        str(report_file),
-    ]
-    code = cli.run(mut.main, args)
-    assert code == 0, capsys.readouterr().err
-    report = json.loads(report_file.read_text())
-    assert report["reached_all"] and report["collisions"] == 0
-    assert report["goals"][0]["position_error_m"] < 0.05
+    args = ["--map", str(room_map), "--world", str(room_map), "--start", "-2.0", "-1.5", "0"]
+    nh.navigate_to_goals([*args, "--goal", "0", "-1", "90"], tmp_path, yaw_deg=None)
 
 
 def test_a_map_of_another_place_is_one_line_and_exit_2(tmp_path):
@@ -166,17 +149,13 @@ def test_a_map_of_another_place_is_one_line_and_exit_2(tmp_path):
     assert "no arena named" not in named.stderr
 
 
-def test_with_no_arena_named_the_map_is_the_world(tmp_path, capsys):
+def test_with_no_arena_named_the_map_is_the_world(tmp_path):
     """``--map`` and ``--start`` with no arena: the robot drives in the map's own world (the
     maze's map, which the default room arena does not match)."""
     _, maze_map = nh.saved_truth_map("maze", tmp_path)
-    report_file = tmp_path / "report.json"
-    args = ["--headless", "--map", str(maze_map), "--start", "-2.65", "-2.4", "90"]
-    args += ["--goal", "-2.65", "-1.4", "90", "--report", str(report_file)]
-    code = cli.run(mut.main, args)
-    assert code == 0, capsys.readouterr().err
-    report = json.loads(report_file.read_text())
-    assert report["reached_all"] and report["collisions"] == 0
+    args = ["--map", str(maze_map), "--start", "-2.65", "-2.4", "90"]
+    args += ["--goal", "-2.65", "-1.4", "90"]
+    nh.navigate_to_goals(args, tmp_path, position_m=None, yaw_deg=None)
 
 
 @pytest.mark.parametrize(
