@@ -21,7 +21,9 @@ What is mapped (to the scenario's keys, ``--set``'s names):
   ``width`` and ``height`` (one costmap here: a key in both costmaps takes the later value);
 * DWA (ROS 1) and DWB (nav2, only when ``FollowPath`` is DWB: MPPI's keys mean other things)
   -> ``navigator.controller.*``: speed and acceleration limits, ``sim_time``, samples, the
-  scoring biases, the goal checker's tolerances, ``controller_frequency``;
+  scoring biases (DWB's ``PathDist``, ``GoalDist``, ``PathAlign`` and ``BaseObstacle``
+  critics' ``scale``, ``PathAlign.forward_point_distance``), the goal checker's tolerances,
+  ``controller_frequency``;
 * the local planner: move_base's ``base_local_planner`` (``teb_local_planner/TebLocalPlannerROS``
   or DWA's) or nav2's ``FollowPath`` plugin -> ``navigator.local_planner`` (``teb``, ``dwa``);
   ``TebLocalPlannerROS``'s keys -> ``navigator.teb.*`` (``TebConfig``: ``dt_ref``,
@@ -29,7 +31,13 @@ What is mapped (to the scenario's keys, ``--set``'s names):
   ``navigator.controller.*`` (``max_vel_x_backwards`` as ``min_vel_x``, negated);
 * NavFn and GlobalPlanner -> ``navigator.planner.*``: ``tolerance``, ``use_astar`` (or
   ``use_dijkstra``, inverted), ``allow_unknown``, ``neutral_cost``, ``cost_factor``,
-  ``lethal_cost``.
+  ``lethal_cost``; nav2's Smac 2D (``SmacPlanner2D``: A*, its ``cost_travel_multiplier`` as
+  ``cost_factor`` in the neutral cost's units); another planner plugin is listed as ignored.
+
+* the progress checker (nav2's ``required_movement_radius`` and ``movement_time_allowance``,
+  move_base's ``oscillation_distance`` and ``oscillation_timeout``) ->
+  ``navigator.recovery.progress_distance`` and ``progress_timeout``: too little movement in
+  that time starts the recovery behaviours.
 
 * ``footprint`` polygons -> ``navigator.costmap.footprint``, with ``robot_radius`` its inscribed
   radius (nav2 ignores ``robot_radius`` when a footprint is set): the costmap inflates around
@@ -53,7 +61,8 @@ import yaml
 
 from drake_sim.base.config import parse_yaml, read_text
 from drake_sim.base.errors import ConfigError
-from drake_sim.navigation.costmap import footprint_radii
+from drake_sim.navigation.costmap import INSCRIBED, footprint_radii
+from drake_sim.navigation.global_planner import GlobalPlannerConfig
 from drake_sim.navigation.teb_planner import TebConfig
 from drake_sim.systems.estimation.amcl_config import AmclConfig
 
@@ -86,6 +95,11 @@ _CONTROLLER = {
     "min_rot_vel": "min_vel_theta",
     "acc_lim_th": "acc_lim_theta",
     "vth_samples": "vtheta_samples",
+    "PathDist.scale": "path_distance_bias",  # nav2 DWB's critics, as ROS 1 DWA's biases
+    "GoalDist.scale": "goal_distance_bias",
+    "PathAlign.scale": "path_align_bias",
+    "PathAlign.forward_point_distance": "forward_point_distance",
+    "BaseObstacle.scale": "occdist_scale",
 }
 """DWA / DWB keys (the last name of their path) -> ``navigator.controller`` keys."""
 _COSTMAP = {
@@ -103,6 +117,13 @@ _PLANNER = {
     "lethal_cost": "lethal_cost",
 }
 """NavFn / GlobalPlanner keys -> ``navigator.planner`` keys (``use_dijkstra`` is inverted)."""
+_PROGRESS = {
+    "required_movement_radius": "progress_distance",  # nav2's progress checker
+    "movement_time_allowance": "progress_timeout",
+    "oscillation_distance": "progress_distance",  # move_base's
+    "oscillation_timeout": "progress_timeout",
+}
+"""Progress-checker keys -> ``navigator.recovery`` keys (a timeout of 0, "never", is ignored)."""
 _TEB = {f.name for f in fields(TebConfig)}
 """teb_local_planner's keys -> ``navigator.teb`` keys (its limits are the controller's)."""
 _LOCAL_PLANNERS = (
@@ -189,6 +210,17 @@ def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
             else:
                 ignored.append(".".join(path))
             continue
+        if path[-1] == "plugin" and "planner_server" in node:  # nav2's global planner
+            name = str(value).lower()
+            if "smacplanner2d" in name:  # A* on the grid, as here
+                mapped["planner.use_astar"] = True
+            elif "navfn" not in name:
+                ignored.append(".".join(path))
+            continue
+        if path[-1] == "cost_travel_multiplier" and "planner_server" in node:  # Smac's
+            neutral = GlobalPlannerConfig().neutral_cost  # Smac: 1 + m * cost / 252 per cell
+            mapped["planner.cost_factor"] = float(value) * neutral / (INSCRIBED - 1)
+            continue
         if path[-1] == "max_vel_x_backwards" and "TebLocalPlannerROS" in (*node, *path):
             mapped["controller.min_vel_x"] = -abs(float(value))
             continue
@@ -200,7 +232,7 @@ def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
                 mapped["costmap.robot_radius"] = inscribed
             continue
         target = _target((*node, *path), params)
-        if target is None:
+        if target is None or (target[0] == "recovery" and value == 0):
             ignored.append(".".join(path))
         elif not (target[1] == "robot_radius" and "costmap.footprint" in mapped):
             section, key = target
@@ -213,9 +245,13 @@ def _navigator(params: dict, node: tuple, where: str) -> tuple[dict, list[str]]:
 def _target(path: tuple, params: dict) -> tuple[str, str] | None:
     """Where a parameter at ``path`` (node names, namespaces and key) goes, or None."""
     key = path[-1]
+    if len(path) > 1 and f"{path[-2]}.{key}" in _CONTROLLER:  # a critic's keys, nested
+        key, path = f"{path[-2]}.{key}", (*path[:-2], f"{path[-2]}.{key}")
     scope = set(path[:-1])
     if key == "controller_frequency":  # move_base's and controller_server's
         return "controller", key
+    if key in _PROGRESS and not scope - {"controller_server", "move_base", "progress_checker"}:
+        return "recovery", _PROGRESS[key]
     if "TebLocalPlannerROS" in scope and key in _TEB:
         return "teb", key
     if scope & {"controller_server", *_LOCAL_PLANNERS} and key in _CONTROLLER:

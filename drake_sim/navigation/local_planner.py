@@ -26,8 +26,10 @@ its measured velocity, the global path, the goal and the (local) costmap into a 
    (end point's distance to the carrot) + ``path_align_bias`` x (distance to the path of a
    point ``forward_point_distance`` ahead of the end pose) + ``occdist_scale`` x (largest cost
    on the rollout). An escape from the inscribed zone must end outside it. The best rollout
-   is commanded; with none valid the status is ``no_valid_trajectory`` and the command is
-   zero (the navigator then runs its recovery behaviours).
+   is commanded. When no rollout that moves on is valid (a bend of a narrow passage, cut too
+   close) it turns on the spot to the path's direction ``forward_point_distance`` ahead;
+   already facing it, the status is ``no_valid_trajectory`` and the command is zero (the
+   navigator then runs its recovery behaviours).
 
 The DWA is the default. A timed-elastic-band planner (``teb_planner``, the navigator's
 ``local_planner: teb``) replaces step 3 with an optimised band of poses and time intervals and
@@ -47,6 +49,7 @@ from drake_sim.base.planar import wrap_angle
 from drake_sim.navigation.costmap import INSCRIBED, LETHAL, footprint_outline
 
 STATUSES = ("following", "rotating_to_goal", "arrived", "no_valid_trajectory")
+STEER_ANGLE = 0.1  # rad: blocked ahead, a path direction further off is turned to first.
 
 
 @dc.dataclass
@@ -312,8 +315,8 @@ class DwaPlanner:
         valid = np.all(self._passable(cost, poses[..., :2], pose, costmap), axis=1)
         valid &= cost[:, -1] < INSCRIBED  # an escape must get out
         valid &= outline_clear(poses, costmap)
-        if not np.any(valid):
-            return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
+        if not np.any(valid & (vs > 1e-6)):  # nothing drives on: turn to the path, or stop
+            return self._blocked_ahead(pose, v0, w0, local, costmap)
         poses, cost, vs, ws = poses[valid], cost[valid], vs[valid], ws[valid]
         end = poses[:, -1]
         ahead = end[:, :2] + c.forward_point_distance * np.column_stack(
@@ -330,6 +333,16 @@ class DwaPlanner:
         trajectory = np.vstack([pose, poses[best]])
         return LocalCommand(float(vs[best]), float(ws[best]), trajectory, "following")
 
+    def _blocked_ahead(self, pose, v0, w0, local, costmap) -> LocalCommand:
+        """No rollout that moves on is valid (a bend of a narrow passage cut too close): turn
+        on the spot to the path's direction ``forward_point_distance`` ahead, when that is
+        more than ``STEER_ANGLE`` off; else (or if the turn is not clear) nothing is valid."""
+        target = _along(local, self.config.forward_point_distance)
+        error = float(wrap_angle(math.atan2(target[1] - pose[1], target[0] - pose[0]) - pose[2]))
+        if math.hypot(*(target - pose[:2])) > 1e-6 and abs(error) > STEER_ANGLE:
+            return self._turn(pose, v0, w0, error, "following", costmap)
+        return LocalCommand(0.0, 0.0, np.empty((0, 3)), "no_valid_trajectory")
+
 
 def outline_clear(poses: np.ndarray, costmap) -> np.ndarray:
     """For each rollout of ``poses`` (m, steps, 3): True when the costmap's footprint polygon
@@ -344,6 +357,12 @@ def outline_clear(poses: np.ndarray, costmap) -> np.ndarray:
     y = poses[..., 1][..., None] + s * outline[:, 0] + c * outline[:, 1]
     costs = costmap.cost_at(np.stack([x, y], axis=-1))
     return np.all(costs < LETHAL, axis=(1, 2))
+
+
+def _along(path: np.ndarray, distance: float) -> np.ndarray:
+    """The point of the dense ``path`` (n, 2) about ``distance`` m along it (its end if shorter)."""
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
+    return path[min(int(np.searchsorted(along, distance)), len(path) - 1)]
 
 
 def _distance_to(points: np.ndarray, path: np.ndarray) -> np.ndarray:

@@ -122,6 +122,63 @@ def test_ros1_costmap_and_dwa_files(tmp_path):
     ]
 
 
+def test_dwb_critics_and_progress_checkers_map_to_their_scenario_keys(tmp_path, caplog):
+    text = """controller_server:
+  ros__parameters:
+    progress_checker: {plugin: "nav2_controller::SimpleProgressChecker",
+                       required_movement_radius: 0.5, movement_time_allowance: 12.0}
+    FollowPath:
+      plugin: "dwb_core::DWBLocalPlanner"
+      PathAlign.scale: 30.0
+      PathAlign.forward_point_distance: 0.1
+      GoalAlign.scale: 24.0
+      PathDist: {scale: 31.0}
+      GoalDist.scale: 23.0
+      BaseObstacle.scale: 0.03
+"""
+    overrides = mut.ros_overrides(write(tmp_path, "nav2.yaml", text))
+    assert sorted(overrides) == [
+        "navigator.controller.forward_point_distance=0.1",
+        "navigator.controller.goal_distance_bias=23.0",
+        "navigator.controller.occdist_scale=0.03",
+        "navigator.controller.path_align_bias=30.0",
+        "navigator.controller.path_distance_bias=31.0",
+        'navigator.local_planner="dwa"',
+        "navigator.recovery.progress_distance=0.5",
+        "navigator.recovery.progress_timeout=12.0",
+    ]
+    assert "FollowPath.GoalAlign.scale" in caplog.text  # no goal-align critic here
+    move_base = "oscillation_timeout: 0.0\noscillation_distance: 0.2\n"  # 0: never
+    assert mut.ros_overrides(write(tmp_path, "move_base.yaml", move_base)) == [
+        "navigator.recovery.progress_distance=0.2"
+    ]
+    assert "oscillation_timeout" in caplog.text.splitlines()[-1]
+    bad = write(tmp_path, "bad.yaml", "oscillation_timeout: -3.0\n")
+    with pytest.raises(ConfigError, match="progress_timeout"):
+        load_navigation_scenario(default_scenario_file(), [f"params=[{bad}]"])
+
+
+def test_global_planner_plugins(tmp_path, caplog):
+    smac = """planner_server:
+  ros__parameters:
+    GridBased: {plugin: "nav2_smac_planner/SmacPlanner2D", tolerance: 0.125,
+                allow_unknown: false, cost_travel_multiplier: 2.0, max_iterations: 1000000}
+"""
+    overrides = mut.ros_overrides(write(tmp_path, "smac.yaml", smac))
+    assert overrides == [
+        "navigator.planner.use_astar=true",
+        "navigator.planner.tolerance=0.125",
+        "navigator.planner.allow_unknown=false",
+        f"navigator.planner.cost_factor={2.0 * 50.0 / 252}",
+    ]
+    assert caplog.text.splitlines()[-1].endswith(
+        "ignored keys planner_server.GridBased.max_iterations (no meaning here yet)"
+    )
+    theta = smac.replace("nav2_smac_planner/SmacPlanner2D", "nav2_theta_star_planner/ThetaStar")
+    assert mut.ros_overrides(write(tmp_path, "theta.yaml", theta))[0].endswith("tolerance=0.125")
+    assert "planner_server.GridBased.plugin" in caplog.text.splitlines()[-1]
+
+
 def test_another_controller_s_keys_are_not_taken_for_dwb(tmp_path):
     mppi = '{plugin: "nav2_mppi_controller::MPPIController", max_vel_x: 9.0}'
     text = f"controller_server:\n  ros__parameters:\n    FollowPath: {mppi}\n"

@@ -1,6 +1,7 @@
 """``python -m drake_sim.navigate``: options, JSON report and exit codes (DESIGN.md)."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -188,3 +189,19 @@ def test_amcl_flags_without_a_map_are_one_line_and_exit_2(flag):
 def test_teb_as_the_local_planner_reaches_the_goal(room_map, tmp_path):
     args = ["--map", str(room_map), "--goal", "2.0", "-0.1", "0"]
     nh.navigate_to_goals([*args, "--set", "navigator.local_planner=teb"], tmp_path)
+
+
+REAL_ROS = Path(__file__).resolve().parents[3] / "shared" / "real_ros"
+
+
+@pytest.mark.parametrize("params", ["nav2_humble/nav2_params.yaml", "nav2_main/nav2_params.yaml"])
+def test_real_nav2_params_drive_in_the_turtlebot3_world(params, tmp_path):
+    """nav2's own files as they are (DWB at 20 Hz, a 0.22 m robot radius: the gaps between the
+    world's pillars are narrow for it) on the TurtleBot3 world's saved map: the goal past the
+    pillars is reached within nav2's tolerances (0.25 m, 0.25 rad) there."""
+    world, params = REAL_ROS / "maps" / "turtlebot3_main" / "map.yaml", REAL_ROS / "params" / params
+    if not (world.is_file() and params.is_file()):
+        pytest.skip(f"no {world} or {params} (third-party files beside the checkout)")
+    args = ["--map", str(world), "--start", "-2.0", "-0.5", "0", "--goal", "0.5", "-1.8", "0"]
+    nh.navigate_to_goals([*args, "--params", str(params)], tmp_path, position_m=0.25,
+                         yaw_deg=14.3)  # fmt: skip

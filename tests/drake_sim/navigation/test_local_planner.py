@@ -98,6 +98,24 @@ def test_drives_out_of_the_inscribed_zone_but_never_into_it():
     )
 
 
+def test_blocked_ahead_it_turns_to_the_path_then_gives_up_facing_it():
+    """A narrow bend cut too close: every rollout that moves on enters the inscribed zone
+    (here the robot is 1 mm outside it, heading 0.5 rad towards the box; at 20 Hz the window of
+    turn rates is narrow). It turns on the spot to the path rather than standing still, and
+    with the path itself leading into the zone nothing is valid (the recoveries take over)."""
+    costmap = _room(boxes=[(1.0, 2.3, 3.0, 3.0)])
+    dut = mut.DwaPlanner(mut.DwaConfig(controller_frequency=20.0))
+    y = 2.099
+    assert costmap.cost_at([1.5, y]) < cm.INSCRIBED <= costmap.cost_at([1.5, y + 0.002])
+    path = np.array([[1.5, y], [3.5, y]])
+    command = dut.compute([1.5, y, 0.5], (0.0, 0.0), path, [3.5, y, 0.0], costmap)
+    assert command.status == "following" and command.v == 0.0
+    assert command.omega == pytest.approx(-dut.config.acc_lim_theta * dut.period)
+    up = np.array([[1.5, y], [1.5, y + 1.0]])  # the path ahead runs into the box's zone
+    command = dut.compute([1.5, y, math.pi / 2], (0.0, 0.0), up, [1.5, y + 1.0, 0.0], costmap)
+    assert command.status == "no_valid_trajectory" and (command.v, command.omega) == (0, 0)
+
+
 def _simulate(dut, costmap, start, path, goal, duration, lag=0.05):
     """Closed loop: the unicycle follows the command with a first-order lag (s), at 100 Hz."""
     pose = np.array(start, dtype=float)
