@@ -37,6 +37,8 @@ from drake_sim.navigation.global_planner import (
     traversal_costs,
 )
 from drake_sim.navigation.local_planner import DwaConfig, DwaPlanner, check_dwa_config, densify
+from drake_sim.navigation.localize_drive import scan_points
+from drake_sim.navigation.localize_drive import step as localize_step
 from drake_sim.navigation.navigator_state import NavState, copy_costmap, finish_goal, status_of
 from drake_sim.navigation.recovery import (
     BEHAVIOURS,
@@ -65,11 +67,15 @@ class NavigatorConfig:
     # ``teb``, with the controller's limits, tolerances and final approach).
     local_planner: str = "dwa"
     teb: TebConfig = dc.field(default_factory=TebConfig)
-    # From no first guess (global localisation), the robot turns on the spot at
-    # localization_spin rad/s until the localisation has settled (its ``localized`` input) or
-    # localization_timeout s have passed, then drives to its goals, as nav2 users spin first.
+    # From no first guess (global localisation), until the localisation has settled (its
+    # ``localized`` input) or localization_timeout s have passed, the robot turns full turns
+    # at localization_spin rad/s and between them drives legs of up to localization_drive m
+    # (0: turns only) at localization_speed m/s into the most open direction it sees
+    # (``localize_drive``), then drives to its goals.
     localization_spin: float = 0.8
-    localization_timeout: float = 30.0
+    localization_timeout: float = 120.0
+    localization_drive: float = 1.5
+    localization_speed: float = 0.15
 
 
 LOCAL_PLANNERS = ("dwa", "teb")
@@ -89,10 +95,13 @@ def check_navigator_config(config: NavigatorConfig, where: str = "navigator") ->
             f"{where}: 'local_planner' must be one of {', '.join(LOCAL_PLANNERS)}, "
             f"got {config.local_planner!r}"
         )
-    for name in ("localization_spin", "localization_timeout"):
-        value = getattr(config, name)
-        if isinstance(value, bool) or not (isinstance(value, int | float) and value > 0):
-            raise ConfigError(f"{where}: '{name}' must be a number > 0, got {value!r}")
+    for name in ("localization_spin", "localization_timeout", "localization_drive",
+                 "localization_speed"):  # fmt: skip
+        value, least = getattr(config, name), 0.0 if name == "localization_drive" else None
+        ok = isinstance(value, int | float) and (value >= least if least is not None else value > 0)
+        if isinstance(value, bool) or not ok:
+            rule = ">= 0" if least is not None else "> 0"
+            raise ConfigError(f"{where}: '{name}' must be a number {rule}, got {value!r}")
         if not math.isfinite(value):
             raise ConfigError(f"{where}: '{name}' must be finite, got {value!r}")
     if not (math.isfinite(config.replan_period) and config.replan_period >= 0):
@@ -125,9 +134,9 @@ class Navigator(LeafSystem):
     ``pose`` is the robot's ``[x, y, yaw]`` (m, m, rad) in the map frame (the localisation's
     estimate); ``twist`` its measured ``[v, omega]`` (m/s, rad/s, from the odometry); ``scan``
     the lidar's ``LaserScan``, the lidar at ``X_base_sensor`` = (x, y, yaw) on the base;
-    ``localized`` (1 or 0, AMCL's) is read only with ``localize_first``: the robot then turns on
-    the spot ("localizing") until it is 1 (or unconnected) or ``localization_timeout`` has
-    passed, before its goals.
+    ``localized`` (1 or 0, AMCL's) is read only with ``localize_first``: the robot then turns
+    and drives short legs ("localizing", ``localize_drive``) until it is 1 (or unconnected)
+    or ``localization_timeout`` has passed, before its goals.
     ``cmd_vel`` is ``[v, omega]`` for the ``DiffDriveController``; ``status`` a
     ``NavigationStatus``. Updated every 1 / ``controller_frequency`` s, ``SCAN_DELAY`` after
     the tick (so a scan taken at the tick is seen by it).
@@ -203,6 +212,9 @@ class Navigator(LeafSystem):
         t = context.get_time()
         pose = np.array(self._pose.Eval(context))
         scan: LaserScan = self._scan.Eval(context)
+        if s.state == "localizing" and self._localize(s, t, context, scan):
+            state.get_mutable_abstract_state(self._state).set_value(s)
+            return
         if scan.ranges.size and scan.time > s.last_scan_time:
             sensor = compose(pose, self._X_base_sensor)
             s.costmap.update_scan(sensor, scan.ranges, scan.angles(), scan.range_max)
@@ -210,14 +222,6 @@ class Navigator(LeafSystem):
         if s.goal is not None and s.last_xy is not None:
             s.driven += math.hypot(*(pose[:2] - s.last_xy))
         s.last_xy = pose[:2].copy()
-        if s.state == "localizing":
-            settled = not self._localized.HasValue(context) or self._localized.Eval(context)[0]
-            if settled or t >= self._config.localization_timeout:
-                s.state = "idle"
-            else:
-                s.command = np.array([0.0, self._config.localization_spin])
-                state.get_mutable_abstract_state(self._state).set_value(s)
-                return
         if s.goal is None and s.queue:
             self._start_goal(s, t, pose)
         elif s.state == "recovering":
@@ -227,6 +231,25 @@ class Navigator(LeafSystem):
         if s.goal is None:
             s.command = np.zeros(2)
         state.get_mutable_abstract_state(self._state).set_value(s)
+
+    def _localize(self, s: NavState, t: float, context, scan: LaserScan) -> bool:
+        """While "localizing": True with this cycle's command set (turns and legs, the map
+        pose unused: no costmap update either), False once settled or timed out."""
+        c = self._config
+        settled = not self._localized.HasValue(context) or self._localized.Eval(context)[0]
+        if settled or t >= c.localization_timeout:
+            s.state = "idle"
+            return False
+        points = np.zeros((0, 2))
+        if scan.ranges.size:
+            points = scan_points(scan.ranges, scan.angles(), self._X_base_sensor)
+        s.localize, v, omega = localize_step(
+            s.localize, self._twist.Eval(context), points, self._dwa.period,
+            radius=c.costmap.robot_radius, leg=c.localization_drive,
+            speed=min(c.localization_speed, c.controller.max_vel_x), spin=c.localization_spin,
+        )  # fmt: skip
+        s.command = np.array([v, omega])
+        return True
 
     def _start_goal(self, s: NavState, t: float, pose) -> None:
         s.goal = s.queue.pop(0)
@@ -249,8 +272,9 @@ class Navigator(LeafSystem):
             if first or s.first_length == 0.0:
                 s.first_length = result.length_m
             s.last_plan_time = t
+            if first or s.state != "following":  # a periodic replan keeps the progress clock
+                s.monitor = StuckMonitor.start(pose[:2], t)
             s.state, s.message = "following", ""
-            s.monitor = StuckMonitor.start(pose[:2], t)
             return True
         s.path = np.zeros((0, 2))
         if result.message != START_IN_OBSTACLE:

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from drake_sim.navigation.costmap import Costmap
+from drake_sim.navigation.localize_drive import LocalizeDrive
 from drake_sim.navigation.recovery import StuckMonitor
 
 STATES = ("idle", "localizing", "planning", "following", "recovering", "arrived", "failed")
@@ -98,6 +99,7 @@ class NavState:
         self.monitor = StuckMonitor()
         self.recoveries = 0  # recovery behaviours run for this goal.
         self.behaviour = None  # the running recovery Behaviour.
+        self.localize = LocalizeDrive()  # turns and legs while "localizing".
         self.results: list[GoalResult] = []
 
     def __deepcopy__(self, memo):

@@ -216,6 +216,27 @@ def test_a_corridor_blocked_by_a_new_obstacle_fails_after_recoveries():
     assert np.min(clearance(arena_footprints(arena), poses[:, :2])) > 0.22
 
 
+def test_no_progress_is_seen_through_periodic_replans(monkeypatch):
+    """A local planner that keeps 'following' with a zero command (a local minimum): the
+    progress clock runs on through the replans every second, so the recoveries start (the
+    first, clearing the costmap, replans at once; the second, a spin, shows 3 s later)."""
+    from drake_sim.navigation.local_planner import DwaPlanner, LocalCommand
+
+    still = LocalCommand(0.0, 0.0, np.zeros((0, 3)), "following")
+    monkeypatch.setattr(DwaPlanner, "compute", lambda self, *args: still)
+    config = mut.NavigatorConfig()
+    config.replan_period, config.recovery.progress_timeout = 1.0, 3.0
+    seen = {}
+
+    def record(t, dut, context, status):
+        if status.state == "recovering":
+            seen.setdefault(status.message, t)
+
+    arena = _arena("room")
+    _run(arena, arena.start_pose(), [[2.2, 1.6, 0.0]], 8.0, config=config, on_step=record)
+    assert 6.0 < seen.get("blocked: no progress", math.inf) < 6.5
+
+
 def test_cancel_stops_the_robot_and_set_goal_preempts():
     arena = _arena("room")
     events = []
@@ -305,3 +326,51 @@ def test_localising_ends_at_its_timeout_or_with_no_input():
     dut, simulator = _localizing(mut.NavigatorConfig(), None)
     simulator.AdvanceTo(0.3)
     assert dut.GetOutputPort("status").Eval(simulator.get_context()).state == "following"
+
+
+class LocalizedAfter(LeafSystem):
+    """``localized`` = 1 once the pose input is ``distance`` m from ``start`` (a localisation
+    that needs the robot to move, as in a building of repeated aisles)."""
+
+    def __init__(self, start, distance):
+        super().__init__()
+        self._pose = self.DeclareVectorInputPort("pose", 3)
+        self.DeclareVectorOutputPort("localized", 1, lambda c, o: o.SetFromVector(
+            [float(math.dist(self._pose.Eval(c)[:2], start[:2]) >= distance)]))  # fmt: skip
+
+
+def test_from_no_guess_it_turns_and_drives_legs_until_localised():
+    arena = _arena("room")
+    start, goal = arena.start_pose(), [0.0, -1.0, 0.0]
+    builder = DiagramBuilder()
+    robot = builder.AddSystem(Unicycle(start))
+    scanner = builder.AddSystem(ScanSource(arena_footprints(arena)))
+    oracle = builder.AddSystem(LocalizedAfter(start, 0.8))
+    dut = builder.AddSystem(mut.Navigator(map=arena_grid(arena, 0.05), config=mut.NavigatorConfig(),
+                                          X_base_sensor=(LIDAR_X, 0.0, 0.0), goals=[goal],
+                                          localize_first=True))  # fmt: skip
+    for port in ("pose", "twist"):
+        builder.Connect(robot.GetOutputPort(port), dut.GetInputPort(port))
+    builder.Connect(robot.GetOutputPort("pose"), scanner.get_input_port())
+    builder.Connect(robot.GetOutputPort("pose"), oracle.get_input_port())
+    builder.Connect(oracle.get_output_port(), dut.GetInputPort("localized"))
+    builder.Connect(scanner.get_output_port(), dut.GetInputPort("scan"))
+    builder.Connect(dut.GetOutputPort("cmd_vel"), robot.get_input_port())
+    simulator = Simulator(builder.Build())
+    poses, states = [], []
+    for t in np.arange(0.1, 60.0, 0.1):
+        simulator.AdvanceTo(t)
+        root = simulator.get_context()
+        poses.append(robot.GetOutputPort("pose").Eval(robot.GetMyContextFromRoot(root)))
+        status = dut.GetOutputPort("status").Eval(dut.GetMyContextFromRoot(root))
+        states.append(status.state)
+        if status.finished and status.results:
+            break
+    poses = np.array(poses)
+    localizing = poses[: states.index("following")]
+    # A full turn on the spot first, then a leg (it was not localised by turning alone).
+    first_move = int(np.argmax(np.hypot(*(localizing[:, :2] - start[:2]).T) > 0.01))
+    assert localizing[first_move, 2] - start[2] > 2 * math.pi - 0.2
+    assert math.dist(localizing[-1, :2], start[:2]) >= 0.8
+    assert status.results[0].reached
+    assert np.min(clearance(arena_footprints(arena), poses[:, :2])) > 0.22
