@@ -37,6 +37,7 @@ class LocalizeDrive:
         yaw: rad, the heading integrated from the measured twist (odometry frame).
         back: rad in that frame, where the last leg came from (None before one).
         distance: m, the leg to drive after this turn.
+        driven: m driven in all (the measured twist's, forwards).
     """
 
     phase: str = "spin"
@@ -45,6 +46,7 @@ class LocalizeDrive:
     yaw: float = 0.0
     back: float | None = None
     distance: float = 0.0
+    driven: float = 0.0
 
 
 def step(
@@ -68,7 +70,7 @@ def step(
         speed: m/s, the drive's; spin: rad/s, the turns'.
     """
     v_meas, w_meas = (float(u) for u in twist)
-    s = dc.replace(state, yaw=state.yaw + w_meas * dt)
+    s = dc.replace(state, yaw=state.yaw + w_meas * dt, driven=state.driven + abs(v_meas) * dt)
     if s.phase == "spin":
         s = dc.replace(s, left=s.left - abs(w_meas) * dt)
         if s.left > 0 or leg <= 0:

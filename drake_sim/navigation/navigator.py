@@ -68,7 +68,8 @@ class NavigatorConfig:
     local_planner: str = "dwa"
     teb: TebConfig = dc.field(default_factory=TebConfig)
     # From no first guess (global localisation), until the localisation has settled (its
-    # ``localized`` input) or localization_timeout s have passed, the robot turns full turns
+    # ``localized`` input, for localization_confirm m of driving on) or localization_timeout
+    # s have passed, the robot turns full turns
     # at localization_spin rad/s and between them drives legs of up to localization_drive m
     # (0: turns only) at localization_speed m/s into the most open direction it sees
     # (``localize_drive``), then drives to its goals.
@@ -76,6 +77,9 @@ class NavigatorConfig:
     localization_timeout: float = 120.0
     localization_drive: float = 1.5
     localization_speed: float = 0.15
+    # Settled must hold while the robot drives this far on (m; a wrong pose among repeated
+    # shelves loses its weight as the view changes): the legs go on until then.
+    localization_confirm: float = 1.0
 
 
 LOCAL_PLANNERS = ("dwa", "teb")
@@ -96,14 +100,13 @@ def check_navigator_config(config: NavigatorConfig, where: str = "navigator") ->
             f"got {config.local_planner!r}"
         )
     for name in ("localization_spin", "localization_timeout", "localization_drive",
-                 "localization_speed"):  # fmt: skip
-        value, least = getattr(config, name), 0.0 if name == "localization_drive" else None
-        ok = isinstance(value, int | float) and (value >= least if least is not None else value > 0)
-        if isinstance(value, bool) or not ok:
-            rule = ">= 0" if least is not None else "> 0"
-            raise ConfigError(f"{where}: '{name}' must be a number {rule}, got {value!r}")
-        if not math.isfinite(value):
-            raise ConfigError(f"{where}: '{name}' must be finite, got {value!r}")
+                 "localization_speed", "localization_confirm"):  # fmt: skip
+        value = getattr(config, name)
+        zero_ok = name in ("localization_drive", "localization_confirm")
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not (number and math.isfinite(value) and (value >= 0 if zero_ok else value > 0)):
+            rule = ">= 0" if zero_ok else "> 0"
+            raise ConfigError(f"{where}: '{name}' must be a finite number {rule}, got {value!r}")
     if not (math.isfinite(config.replan_period) and config.replan_period >= 0):
         raise ConfigError(
             f"{where}: 'replan_period' must be finite and >= 0, got {config.replan_period!r}"
@@ -236,8 +239,15 @@ class Navigator(LeafSystem):
         """While "localizing": True with this cycle's command set (turns and legs, the map
         pose unused: no costmap update either), False once settled or timed out."""
         c = self._config
-        settled = not self._localized.HasValue(context) or self._localized.Eval(context)[0]
-        if settled or t >= c.localization_timeout:
+        if not self._localized.HasValue(context) or t >= c.localization_timeout:
+            s.state = "idle"
+            return False
+        if not self._localized.Eval(context)[0]:
+            s.settled_after = None
+        elif s.settled_after is None:
+            s.settled_after = s.localize.driven
+        confirm = min(c.localization_confirm, c.localization_drive)
+        if s.settled_after is not None and s.localize.driven - s.settled_after >= confirm:
             s.state = "idle"
             return False
         points = np.zeros((0, 2))

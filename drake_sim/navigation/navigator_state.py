@@ -100,6 +100,7 @@ class NavState:
         self.recoveries = 0  # recovery behaviours run for this goal.
         self.behaviour = None  # the running recovery Behaviour.
         self.localize = LocalizeDrive()  # turns and legs while "localizing".
+        self.settled_after = None  # m driven while localizing when AMCL last settled.
         self.results: list[GoalResult] = []
 
     def __deepcopy__(self, memo):

@@ -4,7 +4,8 @@ scores the run against the simulator's truth.
 
 The report's keys are DESIGN.md's (``python -m drake_sim.navigate``). Per goal: ``reached``,
 ``position_error_m`` and ``yaw_error_deg`` (the true pose when the navigator reported it
-arrived, against the goal), ``time_s`` (from the goal's start to its end) and
+arrived, against the goal; an arrival further than ``LOST_M`` beyond the goal tolerance is no
+arrival), ``time_s`` (from the goal's start to its end) and
 ``path_length_m`` (the distance the robot drove for it, by its estimated pose).
 ``collisions`` counts the checks (every ``CHECK_PERIOD``) at which a robot geometry touched
 anything but the floor;
@@ -34,6 +35,9 @@ from drake_sim.worlds.arena import Arena
 CHECK_PERIOD = 0.1
 """s of simulated time between checks of the goals, contacts and clearance."""
 
+LOST_M = 0.5
+"""m: a goal the navigator says it reached, truly further than its ``xy_goal_tolerance`` plus
+this, is not reached ("lost": the localisation settled on a wrong pose)."""
 CONVERGED_M = 0.05
 """m: AMCL's position error under which (with ``CONVERGED_DEG``) it has converged."""
 
@@ -251,15 +255,19 @@ class NavigationRun(SimulationRun):
         goal = np.asarray(result.goal, dtype=float)
         error = math.dist(truth[:2], goal[:2])
         yaw_error = abs(math.degrees(wrap_angle_exact(truth[2] - goal[2])))
+        reached, message = bool(result.reached), "arrived" if result.reached else result.message
+        if reached and error > self.scenario.navigator.controller.xy_goal_tolerance + LOST_M:
+            reached = False
+            message = f"arrived by its own estimate only, {error:.2f} m from the goal (lost)"
         self.results.append(
             GoalReport(
                 goal=[float(goal[0]), float(goal[1]), math.degrees(goal[2])],
-                reached=bool(result.reached),
-                position_error_m=error if result.reached else None,
-                yaw_error_deg=yaw_error if result.reached else None,
+                reached=reached,
+                position_error_m=error if reached else None,
+                yaw_error_deg=yaw_error if reached else None,
                 time_s=float(result.time_s),
                 path_length_m=float(result.driven_m),
-                message="arrived" if result.reached else str(result.message),
+                message=str(message),
             )
         )
 

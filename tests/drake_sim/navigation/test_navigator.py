@@ -271,6 +271,15 @@ def test_bad_goals_and_config_values_are_rejected():
     config = mut.NavigatorConfig(replan_period=math.nan)
     with pytest.raises(ConfigError, match="replan_period"):
         mut.check_navigator_config(config)
+    for name, value in [
+        ("localization_spin", 0.0),
+        ("localization_drive", -1.0),
+        ("localization_confirm", math.inf),
+        ("localization_speed", True),
+    ]:
+        with pytest.raises(ConfigError, match=f"'{name}' must be a finite number"):
+            mut.check_navigator_config(mut.NavigatorConfig(**{name: value}))
+    mut.check_navigator_config(mut.NavigatorConfig(localization_drive=0, localization_confirm=0))
     config = mut.NavigatorConfig()
     config.recovery.max_recoveries = -1
     with pytest.raises(ConfigError, match="recovery.max_recoveries"):
@@ -306,8 +315,11 @@ def _localizing(config, localized: float | None):
     return dut, simulator
 
 
-def test_from_no_guess_it_spins_until_localised_then_drives():
-    config = mut.NavigatorConfig()
+@pytest.mark.parametrize("confirm", [0.0, 1.0])
+def test_from_no_guess_it_spins_until_localised_then_drives(confirm):
+    """Settled ends the localising at once with no confirmation asked; else only once the
+    robot has driven on that far (it cannot here: its twist stays zero)."""
+    config = mut.NavigatorConfig(localization_confirm=confirm)
     dut, simulator = _localizing(config, 0.0)
     simulator.AdvanceTo(1.0)
     context = simulator.get_context()
@@ -315,7 +327,8 @@ def test_from_no_guess_it_spins_until_localised_then_drives():
     assert dut.GetOutputPort("cmd_vel").Eval(context) == pytest.approx([0.0, 0.8])
     dut.GetInputPort("localized").FixValue(simulator.get_mutable_context(), [1.0])
     simulator.AdvanceTo(1.3)
-    assert dut.GetOutputPort("status").Eval(context).state == "following"
+    expected = "following" if confirm == 0 else "localizing"
+    assert dut.GetOutputPort("status").Eval(context).state == expected
 
 
 def test_localising_ends_at_its_timeout_or_with_no_input():
@@ -372,5 +385,7 @@ def test_from_no_guess_it_turns_and_drives_legs_until_localised():
     first_move = int(np.argmax(np.hypot(*(localizing[:, :2] - start[:2]).T) > 0.01))
     assert localizing[first_move, 2] - start[2] > 2 * math.pi - 0.2
     assert math.dist(localizing[-1, :2], start[:2]) >= 0.8
+    # ... and on, settled, for localization_confirm (1 m) more before heading for the goal.
+    assert np.sum(np.hypot(*np.diff(localizing[:, :2], axis=0).T)) > 0.8 + 1.0 - 0.05
     assert status.results[0].reached
     assert np.min(clearance(arena_footprints(arena), poses[:, :2])) > 0.22

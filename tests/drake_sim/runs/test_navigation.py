@@ -173,3 +173,23 @@ def test_a_pose_estimate_restarts_amcl_where_it_is_put(room_map):
     run.start_global_localization()
     particles = run.diagram.GetOutputPort("particles").Eval(run.context)
     assert np.ptp(particles[:, 0]) > 4.0  # over the whole room
+
+
+def test_an_arrival_far_from_the_truth_is_no_arrival():
+    """The navigator arrives by its estimate; the report scores the true pose: within the goal
+    tolerance plus LOST_M it is an arrival, beyond it "lost" (a wrong global localisation)."""
+    from types import SimpleNamespace
+
+    from drake_sim.navigation.navigator_state import GoalResult
+
+    scenario = SimpleNamespace(navigator=SimpleNamespace(
+        controller=SimpleNamespace(xy_goal_tolerance=0.05)))  # fmt: skip
+    run = SimpleNamespace(scenario=scenario, results=[])
+    goal = np.array([1.0, 2.0, 0.0])
+    for truth in ([1.02, 2.0, 0.0], [1.0, 2.0 + 0.05 + mut.LOST_M + 0.01, 0.0]):
+        result = GoalResult(goal, True, "", 10.0, 3.0, 3.1, goal)
+        mut.NavigationRun._record_goal(run, result, np.array(truth))
+    near, far = run.results
+    assert near.reached and near.position_error_m == pytest.approx(0.02)
+    assert not far.reached and far.position_error_m is None
+    assert far.message == "arrived by its own estimate only, 0.56 m from the goal (lost)"
