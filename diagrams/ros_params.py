@@ -250,7 +250,7 @@ def _target(path: tuple, params: dict) -> tuple[str, str] | None:
     scope = set(path[:-1])
     if key == "controller_frequency":  # move_base's and controller_server's
         return "controller", key
-    if key in _PROGRESS and not scope - {"controller_server", "move_base", "progress_checker"}:
+    if key in _PROGRESS and (not scope or scope & {"controller_server", "move_base"}):
         return "recovery", _PROGRESS[key]
     if "TebLocalPlannerROS" in scope and key in _TEB:
         return "teb", key

@@ -23,7 +23,7 @@ DIRECTIONS = np.radians(np.arange(-180, 180, 10))
 """Candidate leg directions in the robot's frame (rad)."""
 MARGIN = 0.1  # m kept beyond the robot's radius, sideways and ahead.
 MIN_LEG = 0.3  # m: a direction more closed than this is not driven.
-STOP_TURN = 0.03  # rad (a turn ends this close) ...
+STOP_TURN = 0.03  # rad: a turn to a leg's direction ends this close to it.
 
 
 @dc.dataclass(frozen=True)

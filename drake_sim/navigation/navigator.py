@@ -69,10 +69,9 @@ class NavigatorConfig:
     teb: TebConfig = dc.field(default_factory=TebConfig)
     # From no first guess (global localisation), until the localisation has settled (its
     # ``localized`` input, for localization_confirm m of driving on) or localization_timeout
-    # s have passed, the robot turns full turns
-    # at localization_spin rad/s and between them drives legs of up to localization_drive m
-    # (0: turns only) at localization_speed m/s into the most open direction it sees
-    # (``localize_drive``), then drives to its goals.
+    # s have passed, the robot turns full turns at localization_spin rad/s and between them
+    # drives legs of up to localization_drive m (0: turns only) at localization_speed m/s into
+    # the most open direction it sees (``localize_drive``); then it drives to its goals.
     localization_spin: float = 0.8
     localization_timeout: float = 120.0
     localization_drive: float = 1.5
