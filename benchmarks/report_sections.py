@@ -149,9 +149,11 @@ SECTIONS = (
         "Navigation on real maps",
         _script("real_maps"),
         "The TurtleBot3 world, nav2's depot and its warehouse simulated from their map files "
-        "alone, AMCL from the true start (and, on the TurtleBot3 world, from no guess), with "
-        "the DWA and with the TEB local planner. Needs the maps (`shared/real_ros/maps` beside "
-        "the checkout, or `$DRAKE_SIM_REAL_MAPS`).",
+        "alone, AMCL from the true start (and, on the TurtleBot3 world and the depot, from no "
+        "guess), with the DWA and with the TEB local planner; `depot_open` and "
+        "`warehouse_open` are goals across open floor, where little is within the lidar's "
+        "3.5 m. Needs the maps (`shared/real_ros/maps` beside the checkout, or "
+        "`$DRAKE_SIM_REAL_MAPS`).",
     ),
     Section(
         "amcl",
