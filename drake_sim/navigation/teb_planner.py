@@ -251,11 +251,6 @@ class _BandProblem:
         )
         return np.concatenate([math.sqrt(w) * r for w, r in parts])
 
-    def sparsity(self) -> np.ndarray:
-        """Which variables each residual depends on (``residuals``' order), (rows, columns)
-        bool."""
-        return self._pattern
-
 
 def band_structure(n: int) -> tuple[np.ndarray, list[np.ndarray]]:
     """For a band of ``n`` poses: which variables each residual depends on (``_BandProblem``'s

@@ -161,8 +161,8 @@ class Amcl(LeafSystem):
 
     def localized(self, context) -> bool:
         """Whether the filter has settled on one pose (``ParticleFilter.localized``): after
-        ``start_global_localization`` a navigation run spins the robot in place until it has
-        (or a time limit passes) before it drives to its goals."""
+        ``start_global_localization`` a navigation run turns and drives short legs until it
+        has (or a time limit passes) before it drives to its goals."""
         return self._get(context).filter.localized()
 
     def history(self, context) -> np.ndarray:

@@ -148,9 +148,12 @@ def distance_table(occupancy_map: OccupancyMap, cap: float) -> np.ndarray:
     return np.append(distance.ravel(), cap)
 
 
-def likelihood_table(occupancy_map: OccupancyMap, config: AmclConfig):
+def likelihood_table(occupancy_map: OccupancyMap, config: AmclConfig, distance=None):
     """(table, resolution): exp(-d^2 / (2 sigma_hit^2)) per cell (flattened, row-major),
     ``d`` the distance (m) to the nearest occupied cell capped at laser_likelihood_max_dist,
-    with one more entry at the cap for points off the map."""
-    d = distance_table(occupancy_map, config.laser_likelihood_max_dist)
+    with one more entry at the cap for points off the map; ``distance``: that
+    ``distance_table`` when the caller has it already."""
+    d = distance
+    if d is None:
+        d = distance_table(occupancy_map, config.laser_likelihood_max_dist)
     return np.exp(-(d * d) / (2.0 * config.laser_sigma_hit**2)), occupancy_map.resolution

@@ -116,12 +116,8 @@ class ParticleFilter:
         self.config = config
         self.map = occupancy_map
         self._rng = np.random.default_rng(seed)
-        self._field = likelihood_table(occupancy_map, self.config)
-        self._distance = (
-            distance_table(occupancy_map, config.laser_likelihood_max_dist)
-            if config.laser_no_return_beams
-            else None
-        )
+        self._distance = distance_table(occupancy_map, config.laser_likelihood_max_dist)
+        self._field = likelihood_table(occupancy_map, self.config, self._distance)
         self._pyramid = match_pyramid(occupancy_map, config) if config.scan_match_refinement else []
         self.last_match: MatchResult | None = None  # The last refinement's match, if any.
         self.refinements = [0, 0]  # Refinements [accepted, rejected] so far.
@@ -307,7 +303,9 @@ class ParticleFilter:
         beams = np.unique(np.linspace(0, len(ranges) - 1, c.laser_max_beams).round().astype(int))
         r, a = ranges[beams], angles[beams]
         ok = np.isfinite(r) & (r < range_max) & (r > range_min)
-        none = ~(np.isfinite(r) & (r < range_max)) if c.laser_no_return_beams else ok & False
+        none = ~(np.isfinite(r) & (r < range_max))
+        if not c.laser_no_return_beams:
+            none[:] = False
         a_none = a[none] + sensor[2]
         r, a = r[ok], a[ok]
         if not (len(r) or len(a_none)):

@@ -48,7 +48,7 @@ def test_the_band_bends_round_an_obstacle_next_to_the_path():
     arc = (c[:-1] + c[1:]) * step[:, 1] - (s[:-1] + s[1:]) * step[:, 0]
     assert np.max(np.abs(arc)) < 0.01  # the non-holonomic constraint holds
     assert 0.0 < command.v <= dut.config.max_vel_x + 1e-9
-    assert problem.sparsity().shape[1] == 3 * (len(poses) - 2) + len(poses) - 1
+    assert problem._pattern.shape[1] == 3 * (len(poses) - 2) + len(poses) - 1
 
 
 def test_the_planner_follows_a_clear_path_forward():
