@@ -2,19 +2,16 @@
 
 Its parameters (``AmclConfig``, ROS's names) are in ``drake_sim.systems.estimation.amcl_config``;
 ``drake_sim.systems.estimation.amcl`` runs it as a Drake system. This module holds the filter
-and its update steps; the sensor model's likelihood field is in ``likelihood_field``, the pose
-histogram (KLD sampling, the clustered estimate) in ``pose_histogram`` and the scan-to-map
-refinement in ``map_refinement``.
+and its update steps; the odometry motion model is in ``motion_model``, the sensor model's
+likelihood field in ``likelihood_field``, the pose histogram (KLD sampling, the clustered
+estimate) in ``pose_histogram`` and the scan-to-map refinement in ``map_refinement``.
 
 The algorithm of Probabilistic Robotics (Thrun, Burgard, Fox 2005) as the ROS ``amcl`` node
 runs it, vectorised with numpy (no Python loop over particles or beams; the likelihood field's
 loop over particles x beams is one compiled numba kernel, cached on disk):
 
-* motion: ``sample_motion_model_odometry`` (Table 5.6), ROS's ``diff-corrected`` model: the
-  odometry's motion since the last filter update is split into a turn, a straight move and a
-  turn, each perturbed by zero-mean Gaussian noise whose variance mixes ``odom_alpha1..4``;
-  ROS 1's ``diff`` takes that mix as the standard deviation, and the ``omni`` models move a
-  holonomic robot by a straight move, a sideways one (``odom_alpha5``) and a turn;
+* motion: ``sample_motion_model_odometry`` (Table 5.6) with ROS's ``odom_model_type``
+  variants (``motion_model``);
 * sensor: the likelihood field (Table 6.3): a beam's end point at distance ``d`` from the
   nearest occupied cell scores ``pz = z_hit * exp(-d^2 / (2 sigma_hit^2)) + z_rand /
   range_max`` (the Gaussian unnormalised, as in ROS); ``laser_max_beams`` beams evenly spread
@@ -85,6 +82,7 @@ from drake_sim.systems.estimation.likelihood_field import (
     scan_likelihood,
 )
 from drake_sim.systems.estimation.map_refinement import match_pyramid, refine_pose
+from drake_sim.systems.estimation.motion_model import sample_motion
 from drake_sim.systems.estimation.pose_histogram import (
     LOCALIZED_SHARE,
     LOCALIZED_STD,
@@ -201,7 +199,7 @@ class ParticleFilter:
             turned = abs(float(wrap_angle(delta[2]))) >= self.config.update_min_a
             if not (self._force or moved or turned):
                 return False
-            self._move(self._odom, odom)
+            sample_motion(self.particles, self._odom, odom, self.config, self._rng)
         scan = (
             np.asarray(ranges, dtype=float),
             np.asarray(angles, dtype=float),
@@ -246,52 +244,6 @@ class ParticleFilter:
         self._resample_count = 0
         self._w_slow = self._w_fast = 0.0
         self._estimate = cluster_estimate(self.particles, self.weights)
-
-    def _move(self, old, new) -> None:
-        """sample_motion_model_odometry with ROS's ``odom_model_type`` (``_spread`` for how the
-        alphas mix)."""
-        c = self.config
-        dx, dy = new[0] - old[0], new[1] - old[1]
-        trans = math.hypot(dx, dy)
-        n = len(self.particles)
-        noise = self._rng.standard_normal((3, n))
-        p = self.particles
-        if c.odom_model_type.startswith("omni"):
-            turn = float(wrap_angle(new[2] - old[2]))
-            a = c.odom_alpha1, c.odom_alpha2, c.odom_alpha3, c.odom_alpha4, c.odom_alpha5
-            trans_hat = trans + noise[0] * self._spread(a[2] * trans**2 + a[0] * turn**2)
-            turn_hat = turn + noise[1] * self._spread(a[3] * turn**2 + a[1] * trans**2)
-            strafe_hat = noise[2] * self._spread(a[0] * turn**2 + a[4] * trans**2)
-            bearing = math.atan2(dy, dx) - old[2] + p[:, 2]
-            cos, sin = np.cos(bearing), np.sin(bearing)
-            p[:, 0] += trans_hat * cos + strafe_hat * sin
-            p[:, 1] += trans_hat * sin - strafe_hat * cos
-            p[:, 2] = wrap_angle(p[:, 2] + turn_hat)
-            return
-        rot1 = 0.0 if trans < 0.01 else float(wrap_angle(math.atan2(dy, dx) - old[2]))
-        rot2 = float(wrap_angle(new[2] - old[2] - rot1))
-        # Backwards motion is a small turn, not a half turn, in the noise model.
-        rot1_noise = min(abs(rot1), abs(float(wrap_angle(rot1 - math.pi))))
-        rot2_noise = min(abs(rot2), abs(float(wrap_angle(rot2 - math.pi))))
-        rot1_hat = rot1 - noise[0] * self._spread(
-            c.odom_alpha1 * rot1_noise**2 + c.odom_alpha2 * trans**2
-        )
-        trans_hat = trans - noise[1] * self._spread(
-            c.odom_alpha3 * trans**2 + c.odom_alpha4 * (rot1_noise**2 + rot2_noise**2)
-        )
-        rot2_hat = rot2 - noise[2] * self._spread(
-            c.odom_alpha1 * rot2_noise**2 + c.odom_alpha2 * trans**2
-        )
-        heading = p[:, 2] + rot1_hat
-        p[:, 0] += trans_hat * np.cos(heading)
-        p[:, 1] += trans_hat * np.sin(heading)
-        p[:, 2] = wrap_angle(heading + rot2_hat)
-
-    def _spread(self, mix: float) -> float:
-        """The standard deviation of a noise term whose alphas mix to ``mix``: its square root
-        in the corrected models; ``mix`` itself in ROS 1's original ``diff`` and ``omni``, which
-        passed the variance as the standard deviation (their alphas are tuned for that)."""
-        return math.sqrt(mix) if self.config.odom_model_type.endswith("-corrected") else mix
 
     def _sense(self, ranges, angles, range_max, range_min, sensor) -> None:
         """Likelihood-field sensor model; reweights the particles, updates w_slow and w_fast."""

@@ -1,6 +1,7 @@
 """drake_sim.systems.estimation.particle_filter: AMCL on the shipped arenas' ground-truth maps,
 synthetic scans (exact 2D ray casting, 1 cm noise) and drifting odometry along driven routes.
-(Its parts alone: test_likelihood_field.py, test_pose_histogram.py, test_map_refinement.py.)
+(Its parts alone: test_motion_model.py, test_likelihood_field.py, test_pose_histogram.py,
+test_map_refinement.py.)
 
 The helpers here (``drive``, ``drifting_odometry``, ``localise``) are also used by
 ``test_amcl.py`` and ``benchmarks/amcl_benchmark.py``.
@@ -181,53 +182,15 @@ def test_updates_only_after_moving_or_turning_enough():
     assert update([0.15, 0.15, -0.6])  # a restart always updates
 
 
-def test_motion_model_moves_particles_with_the_odometry_noise_of_alpha():
-    alpha = dict(odom_alpha1=0.01, odom_alpha2=0.02, odom_alpha3=0.04, odom_alpha4=0.0)
-    config = AmclConfig(max_particles=20000, update_min_d=0.0, **alpha)
-    dut = mut.ParticleFilter(empty_map(), config, 3)
-    dut.set_pose([1.0, 0.0, math.pi / 2], np.zeros((3, 3)), odom_pose=[0.0, 0.0, 0.0])
-    no_returns = np.full(4, np.inf), np.zeros(4)
-    assert dut.update([1.0, 0.0, 0.0], *no_returns, range_max=3.5)  # 1 m straight on
-    p = dut.particles
-    along = p[:, 1]  # the particles face +y
-    np.testing.assert_allclose(along.mean(), 1.0, atol=0.01)
-    np.testing.assert_allclose(along.std(), math.sqrt(0.04), rtol=0.05)  # sqrt(alpha3) * 1 m
-    # Rotation noise from translation, sqrt(alpha2) * 1 m, on each of the two turns.
-    np.testing.assert_allclose(np.std(wrap_angle(p[:, 2] - math.pi / 2)), 0.2, rtol=0.05)
-    np.testing.assert_allclose(np.mean(p[:, 0]), 1.0, atol=0.01)
-
-
-def _moved(model: str, odom, **alpha) -> np.ndarray:
-    """The particles of a filter at (1, 0) facing +y after the odometry moved to ``odom``."""
-    config = AmclConfig(max_particles=20000, update_min_d=0.0, odom_model_type=model, **alpha)
-    dut = mut.ParticleFilter(empty_map(), config, 3)
-    dut.set_pose([1.0, 0.0, math.pi / 2], np.zeros((3, 3)), odom_pose=[0.0, 0.0, 0.0])
-    assert dut.update(odom, np.full(4, np.inf), np.zeros(4), range_max=3.5)
-    return dut.particles
-
-
-def test_ros1_diff_takes_the_alphas_mix_as_the_standard_deviation():
-    """ROS 1's original ``diff``: 2 m straight on with alpha3 0.04 spreads the distance by
-    alpha3 * (2 m)^2 = 0.16 m, where diff-corrected spreads it by sqrt(0.04 * 4) = 0.4 m."""
+def test_motion_moves_the_particles_by_the_odometry_since_the_last_update():
+    """(The models themselves: test_motion_model.py.)"""
     alpha = dict(odom_alpha1=0.0, odom_alpha2=0.0, odom_alpha3=0.04, odom_alpha4=0.0)
-    along = _moved("diff", [2.0, 0.0, 0.0], **alpha)[:, 1]
-    np.testing.assert_allclose(along.mean(), 2.0, atol=0.01)
-    np.testing.assert_allclose(along.std(), 0.16, rtol=0.05)
-    corrected = _moved("diff-corrected", [2.0, 0.0, 0.0], **alpha)[:, 1]
-    np.testing.assert_allclose(corrected.std(), 0.4, rtol=0.05)
-
-
-def test_omni_moves_sideways_with_alpha5():
-    """The odometry moves 1 m to the robot's left (a holonomic robot): the particles, facing
-    +y, move 1 m to -x, spread along it by sqrt(alpha3) and across it by sqrt(alpha5)."""
-    alpha = dict(odom_alpha1=0.0, odom_alpha2=0.0, odom_alpha3=0.01, odom_alpha4=0.0)
-    p = _moved("omni-corrected", [0.0, 1.0, 0.0], odom_alpha5=0.04, **alpha)
-    np.testing.assert_allclose([p[:, 0].mean(), p[:, 1].mean()], [0.0, 0.0], atol=0.01)
-    np.testing.assert_allclose(p[:, 0].std(), 0.1, rtol=0.05)  # along the move
-    np.testing.assert_allclose(p[:, 1].std(), 0.2, rtol=0.05)  # sideways
-    np.testing.assert_allclose(np.std(wrap_angle(p[:, 2] - math.pi / 2)), 0.0, atol=1e-12)
-    raw = _moved("omni", [0.0, 2.0, 0.0], odom_alpha5=0.04, **alpha)  # ROS 1: the mix as sigma
-    np.testing.assert_allclose(raw[:, 1].std(), 0.04 * 4, rtol=0.05)
+    config = AmclConfig(max_particles=2000, update_min_d=0.0, **alpha)
+    dut = mut.ParticleFilter(empty_map(), config, 3)
+    dut.set_pose([1.0, 0.0, math.pi / 2], np.zeros((3, 3)), odom_pose=[0.0, 0.0, 0.0])
+    assert dut.update([1.0, 0.0, 0.0], np.full(4, np.inf), np.zeros(4), range_max=3.5)
+    np.testing.assert_allclose(dut.particles[:, 1].mean(), 1.0, atol=0.02)  # facing +y
+    np.testing.assert_allclose(dut.particles[:, 0], 1.0, atol=1e-12)
 
 
 def test_sensor_model_prefers_the_true_pose_and_skips_beams_without_return():
