@@ -152,6 +152,11 @@ class _SignalStop:
         self.noticed = threading.Event()
 
     def __call__(self, signum, frame):
+        if _in_finalizer(frame):
+            # Raised here, the interrupt would be printed as "Exception ignored in ... __del__"
+            # with its traceback and then lost: deliver the signal again once it has run.
+            threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signum)).start()
+            return
         if self.received is not None:
             _end_now(f"stopped ({signal.Signals(signum).name} again)")
         self.received = signum
@@ -162,6 +167,21 @@ class _SignalStop:
     def _watch(self) -> None:
         if not self.noticed.wait(STOP_GRACE_S):
             _end_now("stopped")
+
+
+REDELIVER_S = 0.01
+"""s after which a signal that arrived inside a finalizer is delivered again."""
+
+
+def _in_finalizer(frame) -> bool:
+    """Whether ``frame`` runs inside an object's ``__del__`` (directly or in what it calls):
+    an exception raised there is printed and discarded (the garbage collector calls it, in
+    llvmlite's compiled code objects for one, at any bytecode)."""
+    while frame is not None:
+        if frame.f_code.co_name == "__del__":
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _end_now(line: str) -> None:

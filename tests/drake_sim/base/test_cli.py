@@ -305,6 +305,27 @@ def test_stop_on_signals_raises_keyboard_interrupt_and_restores():
     assert signal.getsignal(signal.SIGINT) is before
 
 
+def test_a_signal_inside_a_finalizer_is_delivered_after_it(capsys):
+    """A stop that lands in an object's ``__del__`` (llvmlite's, while numba compiles) would be
+    printed as "Exception ignored" with a traceback and lost: it comes again once the finalizer
+    has returned, and stops the run as usual."""
+    finalized = []
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):  # the handler runs at one of these bytecodes
+                sum(range(10))
+            finalized.append(True)
+
+    with pytest.raises(KeyboardInterrupt), mut.stop_on_signals():
+        Finalized()  # dropped at once: its __del__ runs here
+        for _ in range(100):  # 1 s at most (the stop comes again within 10 ms); not longer, so
+            time.sleep(0.01)  # a lost stop fails here before its watchdog would end pytest
+    assert finalized == [True]
+    assert "Exception ignored" not in capsys.readouterr().err
+
+
 @pytest.fixture(scope="module")
 def meshcat():
     return Meshcat()
