@@ -150,8 +150,10 @@ class _SignalStop:
     def __init__(self):
         self.received: int | None = None
         self.noticed = threading.Event()
+        self._watchdog: threading.Thread | None = None
 
     def __call__(self, signum, frame):
+        self._start_watchdog()
         if _in_finalizer(frame):
             # Raised here, the interrupt would be printed as "Exception ignored in ... __del__"
             # with its traceback and then lost: deliver the signal again once it has run.
@@ -160,9 +162,12 @@ class _SignalStop:
         if self.received is not None:
             _end_now(f"stopped ({signal.Signals(signum).name} again)")
         self.received = signum
-        watchdog = threading.Thread(target=self._watch, name="stop-watchdog", daemon=True)
-        watchdog.start()
         raise KeyboardInterrupt(signal.Signals(signum).name)
+
+    def _start_watchdog(self) -> None:
+        if self._watchdog is None:
+            self._watchdog = threading.Thread(target=self._watch, name="stop-watchdog", daemon=True)
+            self._watchdog.start()
 
     def _watch(self) -> None:
         if not self.noticed.wait(STOP_GRACE_S):
