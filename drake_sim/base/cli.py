@@ -145,6 +145,8 @@ class _SignalStop:
     a C++ library that catches everything): a watchdog thread then ends the process with code 0
     ``STOP_GRACE_S`` after the signal unless the run has noticed the stop by then (``is_stop``
     was asked). A second signal ends the process at once, with code 0: the user insists.
+    A signal that lands inside a finalizer (``__del__``, where Python would print the interrupt
+    with its traceback and drop it) is sent again ``REDELIVER_S`` later instead.
     """
 
     def __init__(self):
@@ -157,7 +159,9 @@ class _SignalStop:
         if _in_finalizer(frame):
             # Raised here, the interrupt would be printed as "Exception ignored in ... __del__"
             # with its traceback and then lost: deliver the signal again once it has run.
-            threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signum)).start()
+            again = threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signum))
+            again.daemon = True
+            again.start()
             return
         if self.received is not None:
             _end_now(f"stopped ({signal.Signals(signum).name} again)")
