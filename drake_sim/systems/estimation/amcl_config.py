@@ -59,6 +59,10 @@ class AmclConfig:
     # nothing, by tracing each ray through the map (a hit when it runs free to the maximum
     # range); the evidence that makes global localisation work in large open spaces.
     laser_no_return_beams: bool = False
+    # Ours: when fewer than this many of the beams used hit something, trace their rays
+    # through the map too; a wall a ray enters short of its end point scores as that shortfall
+    # (``likelihood_field.traced_hit_likelihood``). 0: never, as ROS.
+    laser_trace_hits_below: int = 0
     # ROS's odometry models: diff-corrected, diff (ROS 1's original: the alphas' mix used as a
     # standard deviation, not a variance), omni-corrected, omni (holonomic: alpha5 strafes).
     odom_model_type: str = "diff-corrected"
@@ -135,6 +139,8 @@ def check_amcl_config(
         fail("resample_interval", "at least 1")
     if config.laser_max_beams < 2:
         fail("laser_max_beams", "at least 2")
+    if config.laser_trace_hits_below < 0:
+        fail("laser_trace_hits_below", "at least 0")
     for key in ("recovery_alpha_slow", "recovery_alpha_fast"):
         if not 0.0 <= getattr(config, key) <= 1.0:
             fail(key, "in [0, 1]")

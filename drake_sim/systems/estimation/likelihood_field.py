@@ -3,9 +3,11 @@ the weight ROS's ``amcl`` gives each particle for a scan on it, one compiled num
 particles x beams (cached on disk); and our term for the beams that saw nothing
 (``laser_no_return_beams``): each such ray is traced through the map's distance field (sphere
 tracing: steps as long as the distance to the nearest occupied cell, so a ray across open floor
-takes two or three) and scores as a hit when the map lets it run free to the maximum range.
-Part of the particle filter (``drake_sim.systems.estimation.particle_filter``, whose docstring
-gives the model).
+takes two or three) and scores as a hit when the map lets it run free to the maximum range;
+and, for scans with few hits (``laser_trace_hits_below``), the hits' rays traced the same way
+over their last few sigma, so an end point behind a face no longer scores as a hit. Part of
+the particle filter (``drake_sim.systems.estimation.particle_filter``, whose docstring gives
+the model).
 """
 
 import math
@@ -46,6 +48,38 @@ def scan_likelihood(particles, bx, by, table, origin, resolution, shape, z_hit, 
 
 
 @numba.njit(cache=True)
+def _free_run(lx, ly, mx, my, start, limit, distance, n_rows, n_cols, resolution, bisect):
+    """How far (m) a ray from (lx, ly) (cells) along (mx, my) (cells per m), looked at from
+    ``start`` (m) on, runs before it enters an occupied cell of the map: ``limit`` at most,
+    ``start`` when it starts in one. Sphere tracing (steps as long as the distance to the
+    nearest occupied cell, half a cell at least: the entry is passed by half a cell at most),
+    then with ``bisect`` the entry found to 1/32 of a cell; a ray that leaves the map runs
+    free."""
+    # A point in a cell whose centre is d from an occupied cell's centre is at least
+    # d - sqrt(2) cells from that cell: steps that long cannot pass over it.
+    margin, least = 1.5 * resolution, 0.5 * resolution
+    s, before = start, start
+    while s < limit:
+        col = math.floor(lx + mx * s)
+        row = math.floor(ly + my * s)
+        if not (0 <= row < n_rows and 0 <= col < n_cols):
+            return limit  # off the map (which is convex): nothing more to meet
+        if distance[row * n_cols + col] <= 0.0:
+            for _ in range(4 if bisect else 0):  # the entry lies in (before, s]
+                middle = 0.5 * (before + s)
+                col = math.floor(lx + mx * middle)
+                row = math.floor(ly + my * middle)
+                if distance[row * n_cols + col] <= 0.0:
+                    s = middle
+                else:
+                    before = middle
+            return s
+        before = s
+        s += max(distance[row * n_cols + col] - margin, least)
+    return limit
+
+
+@numba.njit(cache=True)
 def no_return_likelihood(
     particles,
     sensor,
@@ -76,9 +110,6 @@ def no_return_likelihood(
     x0, y0, yaw0 = origin
     c0, s0 = math.cos(yaw0), math.sin(yaw0)
     inv = 1.0 / resolution
-    # A point in a cell whose centre is d from an occupied cell's centre is at least
-    # d - sqrt(2) cells from that cell: steps that long cannot pass over it.
-    margin, least = 1.5 * resolution, 0.5 * resolution
     result = np.zeros(particles.shape[0])
     for i in range(particles.shape[0]):
         cos_t, sin_t = math.cos(particles[i, 2]), math.sin(particles[i, 2])
@@ -89,19 +120,64 @@ def no_return_likelihood(
         for j in range(ux.shape[0]):
             dx, dy = cos_t * ux[j] - sin_t * uy[j], sin_t * ux[j] + cos_t * uy[j]
             mx, my = (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
-            s = 0.0
-            while s < range_max:
-                col = math.floor(lx + mx * s)
-                row = math.floor(ly + my * s)
-                if not (0 <= row < n_rows and 0 <= col < n_cols):
-                    s = range_max  # off the map (which is convex): nothing more to meet
-                    break
-                d = distance[row * n_cols + col]
-                if d <= 0.0:
-                    break
-                s += max(d - margin, least)
+            s = _free_run(
+                lx, ly, mx, my, 0.0, range_max, distance, n_rows, n_cols, resolution, False
+            )
             short = max(range_max - s, 0.0)
             pz = z_hit * math.exp(-(short * short) / (2.0 * sigma * sigma)) + z_rand_term
+            total += pz * pz * pz
+        result[i] = total
+    return result
+
+
+@numba.njit(cache=True)
+def traced_hit_likelihood(
+    particles, sensor, ux, uy, ranges, distance, origin, resolution, shape, sigma, z_hit,
+    z_rand_term,
+):  # fmt: skip
+    """ROS's weight ``1 + sum(pz^3)`` of each particle (n,) for the beams that hit something,
+    each beam's ray traced through the map as well (ours, ``laser_trace_hits_below``):
+    ``pz = z_hit * exp(-e^2 / (2 sigma^2)) + z_rand_term``, ``e`` (m) the larger of the end
+    point's distance to the nearest occupied cell's face (its centre's less half a cell) and how
+    far short of the end point the ray enters an occupied cell (looked for over the last
+    ``3 sigma``: further back, pz is at its floor anyway). The likelihood field alone scores an
+    end point inside or behind an obstacle as well as one on its face, so with few beams in
+    range the estimate creeps towards what the robot sees; the traced ray tells them apart, as
+    the beam model does, and the face (not the centre) makes both sides of a face score alike.
+
+    Args:
+        particles: (n, 3) poses [x, y, yaw] of the base in the world.
+        sensor: [x, y] of the sensor in the base frame (m).
+        ux, uy, ranges: (k,) unit directions of the beams in the base frame and their ranges (m).
+        distance: from ``distance_table``; origin, resolution, shape: the map's.
+    """
+    n_rows, n_cols = shape
+    x0, y0, yaw0 = origin
+    c0, s0 = math.cos(yaw0), math.sin(yaw0)
+    inv, half = 1.0 / resolution, 0.5 * resolution
+    window = 3.0 * sigma  # beyond it, pz is the floor whatever the ray meets
+    outside = n_rows * n_cols
+    result = np.empty(particles.shape[0])
+    for i in range(particles.shape[0]):
+        cos_t, sin_t = math.cos(particles[i, 2]), math.sin(particles[i, 2])
+        sx = particles[i, 0] + cos_t * sensor[0] - sin_t * sensor[1] - x0
+        sy = particles[i, 1] + sin_t * sensor[0] + cos_t * sensor[1] - y0
+        lx, ly = (c0 * sx + s0 * sy) * inv, (-s0 * sx + c0 * sy) * inv  # in cells
+        total = 1.0
+        for j in range(ux.shape[0]):
+            dx, dy = cos_t * ux[j] - sin_t * uy[j], sin_t * ux[j] + cos_t * uy[j]
+            mx, my = (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
+            col = math.floor(lx + mx * ranges[j])
+            row = math.floor(ly + my * ranges[j])
+            index = outside
+            if 0 <= row < n_rows and 0 <= col < n_cols:
+                index = row * n_cols + col
+            e = max(distance[index] - half, 0.0)
+            r = ranges[j]
+            start = max(r - window, 0.0)
+            run = _free_run(lx, ly, mx, my, start, r, distance, n_rows, n_cols, resolution, True)
+            e = max(e, r - run)
+            pz = z_hit * math.exp(-(e * e) / (2.0 * sigma * sigma)) + z_rand_term
             total += pz * pz * pz
         result[i] = total
     return result

@@ -21,7 +21,12 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   the map's occupied cells, computed once and capped at ``laser_likelihood_max_dist``; points
   off the map take that cap. With ``laser_no_return_beams`` (ours) the beams that saw nothing
   count too (``likelihood_field.no_return_factor``): a 3.5 m lidar in a 30 m hall sees almost
-  nothing, and "no wall within range here" is then most of what the scan says;
+  nothing, and "no wall within range here" is then most of what the scan says. With fewer than
+  ``laser_trace_hits_below`` hits (ours) their rays are traced as well
+  (``likelihood_field.traced_hit_likelihood``): an end point behind a face then scores as one
+  as far in front of it, where the field alone pulls the estimate towards the few things in
+  view (nav2's depot: 0.15 m over a 2.3 m drive with exact odometry, 0.05 m traced); a scan
+  with more hits is not traced (about 15x the cost per beam, and it pins the estimate anyway);
 * resampling every ``resample_interval`` updates with a particle count chosen by KLD sampling
   (Fox 2003): ``n`` grows until it exceeds the bound for the number ``k`` of histogram bins
   (0.5 m x 0.5 m x 10 degrees, as ROS) that the new set occupies, between ``min_particles``
@@ -80,6 +85,7 @@ from drake_sim.systems.estimation.likelihood_field import (
     likelihood_table,
     no_return_factor,
     scan_likelihood,
+    traced_hit_likelihood,
 )
 from drake_sim.systems.estimation.map_refinement import match_pyramid, refine_pose
 from drake_sim.systems.estimation.motion_model import sample_motion
@@ -268,9 +274,16 @@ class ParticleFilter:
         table, resolution = self._field
         args = (self.map.origin, resolution, self.map.shape)
         z_rand_term = c.laser_z_rand / range_max
-        likelihood = scan_likelihood(
-            self.particles, bx, by, table, *args, c.laser_z_hit, z_rand_term
-        )
+        if len(r) < c.laser_trace_hits_below:
+            u = (np.cos(sensor[2] + a), np.sin(sensor[2] + a))
+            likelihood = traced_hit_likelihood(
+                self.particles, sensor[:2], *u, r, self._distance, *args,
+                c.laser_sigma_hit, c.laser_z_hit, z_rand_term,
+            )  # fmt: skip
+        else:
+            likelihood = scan_likelihood(
+                self.particles, bx, by, table, *args, c.laser_z_hit, z_rand_term
+            )
         if len(a_none):
             likelihood *= no_return_factor(
                 self.particles, a_none, sensor, self._distance, self.map, c, range_max

@@ -34,6 +34,7 @@ from drake_sim.base.errors import ConfigError
         ("refinement_min_score", 1.5, "in [0, 1]"),
         ("refinement_degenerate_ratio", -0.1, "in [0, 1]"),
         ("refinement_min_points", 2, "at least 3"),
+        ("laser_trace_hits_below", -1, "at least 0"),
         ("refinement_levels", 0, "at least 1"),
         ("refinement_iterations", 0, "at least 1"),
         ("global_localization_density", -1.0, "non-negative"),
@@ -79,6 +80,7 @@ def test_defaults_are_ros_amcl_and_the_shipped_file_loads():
     assert not ros.scan_match_refinement and shipped.scan_match_refinement
     # So are the beams that saw nothing and the density of a global spread: ROS's by default.
     assert not ros.laser_no_return_beams and shipped.laser_no_return_beams
+    assert ros.laser_trace_hits_below == 0 < shipped.laser_trace_hits_below
     assert ros.global_localization_density == 0.0 < shipped.global_localization_density
     np.testing.assert_allclose(np.diag(shipped.initial_covariance()), [0.25, 0.25, 0.2742])
 
