@@ -11,7 +11,10 @@ its measured velocity, the global path, the goal and the (local) costmap into a 
    robot has stopped (measured turn rate at most ``min_vel_theta``, speed at most
    ``min_approach_vel``: a fast turn would carry it on). The tolerances are what the acceptance
    measures, so aiming inside them leaves room for the wheel controller's lag and the
-   localisation's noise.
+   localisation's noise. Once turning to the goal's yaw it goes on turning while the estimate
+   stays within twice ``xy_goal_tolerance`` (the caller passes ``at_goal_xy``: nav2's stateful
+   goal checker), so an estimate that shifts a little as the robot turns does not send it back
+   to the point (across nav2's open depot floor it swung to and fro for 10 s).
 2. When the path ahead (the "carrot", ``lookahead_distance`` along it) lies more than
    ``rotate_to_heading_angle`` off the robot's heading it turns on the spot first (like nav2's
    rotation shim), so it never swings wide into a wall.
@@ -181,7 +184,7 @@ class DwaPlanner:
         """s, one control cycle."""
         return 1.0 / self.config.controller_frequency
 
-    def compute(self, pose, velocity, path, goal, costmap) -> LocalCommand:
+    def compute(self, pose, velocity, path, goal, costmap, at_goal_xy=False) -> LocalCommand:
         """The command for one cycle.
 
         Args:
@@ -190,6 +193,10 @@ class DwaPlanner:
             path: (n, 2) the global path, start to goal (m); may be empty near the goal.
             goal: [x, y, yaw] the goal pose.
             costmap: the local ``Costmap`` (outside it counts as unknown: invalid).
+            at_goal_xy: the last cycle was turning to the goal's heading (``rotating_to_goal``):
+                it goes on turning while the estimate stays within twice ``xy_goal_tolerance``,
+                as nav2's stateful goal checker does (a localisation that shifts a little while
+                the robot turns on the spot must not send it back and forth).
         """
         c = self.config
         pose = np.asarray(pose, dtype=float)
@@ -199,8 +206,10 @@ class DwaPlanner:
         distance = math.hypot(*to_goal)
         bearing = float(wrap_angle(math.atan2(to_goal[1], to_goal[0]) - pose[2]))
         xy_target = c.goal_precision * c.xy_goal_tolerance
-        if distance <= xy_target or (
-            distance <= c.xy_goal_tolerance and abs(bearing) > math.pi / 3
+        if (
+            distance <= xy_target
+            or (distance <= c.xy_goal_tolerance and abs(bearing) > math.pi / 3)
+            or (at_goal_xy and distance <= 2 * c.xy_goal_tolerance)
         ):
             return self._rotate_to_goal(pose, v0, w0, goal[2], costmap)
         if distance <= c.approach_distance:

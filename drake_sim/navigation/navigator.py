@@ -263,7 +263,7 @@ class Navigator(LeafSystem):
     def _start_goal(self, s: NavState, t: float, pose) -> None:
         s.goal = s.queue.pop(0)
         s.goal_index += 1
-        s.goal_start, s.driven, s.recoveries = t, 0.0, 0
+        s.goal_start, s.driven, s.recoveries, s.at_goal_xy = t, 0.0, 0, False
         s.first_length, s.message = 0.0, ""
         s.path, s.trajectory, s.behaviour = np.zeros((0, 2)), np.zeros((0, 3)), None
         s.state = "planning"
@@ -310,8 +310,9 @@ class Navigator(LeafSystem):
                 return
             remaining = s.path
         command = self._dwa.compute(
-            pose, twist, remaining, s.target, s.costmap.local_window(pose[:2])
+            pose, twist, remaining, s.target, s.costmap.local_window(pose[:2]), s.at_goal_xy
         )
+        s.at_goal_xy = command.status == "rotating_to_goal"  # (nav2's stateful goal checker)
         s.command = np.array([command.v, command.omega])
         s.trajectory = command.trajectory
         if command.status == "arrived":

@@ -98,6 +98,7 @@ class NavState:
         self.last_xy = None
         self.monitor = StuckMonitor()
         self.recoveries = 0  # recovery behaviours run for this goal.
+        self.at_goal_xy = False  # the goal's position reached: only its heading is left.
         self.behaviour = None  # the running recovery Behaviour.
         self.localize = LocalizeDrive()  # turns and legs while "localizing".
         self.settled_after = None  # m driven while localizing when AMCL last settled.

@@ -7,7 +7,9 @@ The odometry's motion between two readings is split into a turn, a straight move
 base, ``odom_alpha5`` strafes), each perturbed per particle by zero-mean Gaussian noise whose
 variance mixes ``odom_alpha1..4``. ROS 1's original ``diff`` and ``omni`` took that mix as the
 standard deviation (their alphas are tuned for that); the ``-corrected`` models take its
-square root.
+square root. ROS drops the direction of a move under 1 cm (its first turn becomes 0), which
+moves the particles along their heading when the base shifts sideways in a turn on the spot;
+here such a move keeps its direction, with ROS's noise.
 """
 
 import math
@@ -44,11 +46,20 @@ def sample_motion(particles: np.ndarray, old, new, config: AmclConfig, rng) -> N
         p[:, 1] += trans_hat * sin - strafe_hat * cos
         p[:, 2] = wrap_angle(p[:, 2] + turn_hat)
         return
-    rot1 = 0.0 if trans < 0.01 else float(wrap_angle(math.atan2(dy, dx) - old[2]))
+    rot1 = float(wrap_angle(math.atan2(dy, dx) - old[2])) if trans > 0.0 else 0.0
     rot2 = float(wrap_angle(new[2] - old[2] - rot1))
-    # Backwards motion is a small turn, not a half turn, in the noise model.
-    rot1_noise = min(abs(rot1), abs(float(wrap_angle(rot1 - math.pi))))
-    rot2_noise = min(abs(rot2), abs(float(wrap_angle(rot2 - math.pi))))
+
+    def as_noise(turn: float) -> float:  # backwards motion is a small turn, not a half turn
+        return min(abs(turn), abs(float(wrap_angle(turn - math.pi))))
+
+    if trans < 0.01:
+        # A small move while turning (ROS drops its direction, rot1 = 0, and so moves the
+        # particles along their heading: wrong by up to twice the move when the base shifts
+        # sideways in a turn on the spot). The move keeps its direction here; the noise is
+        # ROS's, all of the turn in rot2's.
+        rot1_noise, rot2_noise = 0.0, as_noise(float(wrap_angle(new[2] - old[2])))
+    else:
+        rot1_noise, rot2_noise = as_noise(rot1), as_noise(rot2)
     rot1_hat = rot1 - noise[0] * spread(c.odom_alpha1 * rot1_noise**2 + c.odom_alpha2 * trans**2)
     trans_hat = trans - noise[1] * spread(
         c.odom_alpha3 * trans**2 + c.odom_alpha4 * (rot1_noise**2 + rot2_noise**2)

@@ -84,6 +84,23 @@ def test_rotates_to_the_goal_yaw_then_arrives():
     assert command.status == "arrived" and (command.v, command.omega) == (0.0, 0.0)
 
 
+def test_a_turn_to_the_goal_yaw_goes_on_while_the_estimate_shifts_a_little():
+    """nav2's stateful goal checker: once turning to the goal's heading, an estimate that
+    drifts a little past ``xy_goal_tolerance`` (AMCL across open floor while the robot turns)
+    does not send the robot back to the goal point; one that leaves twice the tolerance does."""
+    c = mut.DwaConfig(xy_goal_tolerance=0.025)
+    dut = mut.DwaPlanner(c)
+    goal = [2.0, 2.0, 1.0]
+    pose = [2.0 - 0.03 * math.cos(2.5), 2.0 - 0.03 * math.sin(2.5), 2.5]  # 3 cm short of it
+    fresh = dut.compute(pose, (0.0, 0.0), [[2.0, 2.0]], goal, _room())
+    assert fresh.status == "following" and fresh.v > 0  # drives on to the point
+    turning = dut.compute(pose, (0.0, 0.0), [[2.0, 2.0]], goal, _room(), at_goal_xy=True)
+    assert turning.status == "rotating_to_goal" and turning.v == 0.0 and turning.omega < 0
+    far = [2.06, 2.0, 2.5]
+    again = dut.compute(far, (0.0, 0.0), [[2.0, 2.0]], goal, _room(), at_goal_xy=True)
+    assert again.status == "following"
+
+
 def test_drives_out_of_the_inscribed_zone_but_never_into_it():
     costmap = _room(boxes=[(2.0, 1.0, 2.4, 3.0)])  # a box 0.15 m ahead of x = 1.85
     dut = mut.DwaPlanner(mut.DwaConfig())

@@ -76,3 +76,16 @@ def test_omni_moves_sideways_with_alpha5():
     np.testing.assert_allclose(np.std(wrap_angle(p[:, 2] - math.pi / 2)), 0.0, atol=1e-12)
     raw = _moved("omni", [0.0, 2.0, 0.0], odom_alpha5=0.04, **alpha)  # ROS 1: the mix as sigma
     np.testing.assert_allclose(raw[:, 1].std(), 0.04 * 4, rtol=0.05)
+
+
+def test_a_small_move_while_turning_keeps_its_direction():
+    """The base shifts 8 mm to its left while turning on the spot by 0.1 rad (a diff drive's
+    final turn): ROS drops the direction of a move under 1 cm and moves the particles along
+    their heading; here they move to their left, with ROS's noise."""
+    alpha = dict(odom_alpha1=0.0, odom_alpha2=0.0, odom_alpha3=0.0, odom_alpha4=0.0)
+    p = _moved("diff-corrected", [0.0, 0.008, 0.1], **alpha)  # the particles face +y
+    np.testing.assert_allclose(p[:, :2], np.tile([1.0 - 0.008, 0.0], (COUNT, 1)), atol=1e-12)
+    np.testing.assert_allclose(p[:, 2], math.pi / 2 + 0.1, atol=1e-12)
+    noisy = _moved("diff-corrected", [0.0, 0.008, 0.1], **{**alpha, "odom_alpha1": 0.01})
+    # All of the turn's noise in one turn, as ROS: sqrt(alpha1) * 0.1 rad.
+    np.testing.assert_allclose(np.std(noisy[:, 2]), 0.01, rtol=0.05)
