@@ -48,6 +48,23 @@ def scan_likelihood(particles, bx, by, table, origin, resolution, shape, z_hit, 
 
 
 @numba.njit(cache=True)
+def _sensor_cells(particle, sensor, x0, y0, c0, s0, inv):
+    """(lx, ly, cos, sin): the sensor of a base at ``particle`` [x, y, yaw] in the map's cells,
+    and the cosine and sine of the base's heading."""
+    cos_t, sin_t = math.cos(particle[2]), math.sin(particle[2])
+    sx = particle[0] + cos_t * sensor[0] - sin_t * sensor[1] - x0
+    sy = particle[1] + sin_t * sensor[0] + cos_t * sensor[1] - y0
+    return (c0 * sx + s0 * sy) * inv, (-s0 * sx + c0 * sy) * inv, cos_t, sin_t
+
+
+@numba.njit(cache=True)
+def _direction_cells(ux, uy, cos_t, sin_t, c0, s0, inv):
+    """(mx, my): a beam's unit direction (ux, uy) in the base frame, in map cells per m."""
+    dx, dy = cos_t * ux - sin_t * uy, sin_t * ux + cos_t * uy
+    return (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
+
+
+@numba.njit(cache=True)
 def _free_run(lx, ly, mx, my, start, limit, distance, n_rows, n_cols, resolution, bisect):
     """How far (m) a ray from (lx, ly) (cells) along (mx, my) (cells per m), looked at from
     ``start`` (m) on, runs before it enters an occupied cell of the map: ``limit`` at most,
@@ -112,14 +129,10 @@ def no_return_likelihood(
     inv = 1.0 / resolution
     result = np.zeros(particles.shape[0])
     for i in range(particles.shape[0]):
-        cos_t, sin_t = math.cos(particles[i, 2]), math.sin(particles[i, 2])
-        sx = particles[i, 0] + cos_t * sensor[0] - sin_t * sensor[1] - x0
-        sy = particles[i, 1] + sin_t * sensor[0] + cos_t * sensor[1] - y0
-        lx, ly = (c0 * sx + s0 * sy) * inv, (-s0 * sx + c0 * sy) * inv  # in cells
+        lx, ly, cos_t, sin_t = _sensor_cells(particles[i], sensor, x0, y0, c0, s0, inv)
         total = 0.0
         for j in range(ux.shape[0]):
-            dx, dy = cos_t * ux[j] - sin_t * uy[j], sin_t * ux[j] + cos_t * uy[j]
-            mx, my = (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
+            mx, my = _direction_cells(ux[j], uy[j], cos_t, sin_t, c0, s0, inv)
             s = _free_run(
                 lx, ly, mx, my, 0.0, range_max, distance, n_rows, n_cols, resolution, False
             )
@@ -159,14 +172,10 @@ def traced_hit_likelihood(
     outside = n_rows * n_cols
     result = np.empty(particles.shape[0])
     for i in range(particles.shape[0]):
-        cos_t, sin_t = math.cos(particles[i, 2]), math.sin(particles[i, 2])
-        sx = particles[i, 0] + cos_t * sensor[0] - sin_t * sensor[1] - x0
-        sy = particles[i, 1] + sin_t * sensor[0] + cos_t * sensor[1] - y0
-        lx, ly = (c0 * sx + s0 * sy) * inv, (-s0 * sx + c0 * sy) * inv  # in cells
+        lx, ly, cos_t, sin_t = _sensor_cells(particles[i], sensor, x0, y0, c0, s0, inv)
         total = 1.0
         for j in range(ux.shape[0]):
-            dx, dy = cos_t * ux[j] - sin_t * uy[j], sin_t * ux[j] + cos_t * uy[j]
-            mx, my = (c0 * dx + s0 * dy) * inv, (-s0 * dx + c0 * dy) * inv
+            mx, my = _direction_cells(ux[j], uy[j], cos_t, sin_t, c0, s0, inv)
             col = math.floor(lx + mx * ranges[j])
             row = math.floor(ly + my * ranges[j])
             index = outside
