@@ -27,7 +27,7 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   as far in front of it, where the field alone pulls the estimate towards the few things in
   view (nav2's depot, a 2.3 m drive with exact odometry: 0.15 m towards them, about 0.01 m
   traced; the few cm left lie across, where position and yaw trade off); a scan with more
-  hits is not traced (15 to 30 times the cost per beam; it pins the estimate anyway);
+  hits is not traced (16 to 33 times the cost per beam; it pins the estimate anyway);
 * resampling every ``resample_interval`` updates with a particle count chosen by KLD sampling
   (Fox 2003): ``n`` grows until it exceeds the bound for the number ``k`` of histogram bins
   (0.5 m x 0.5 m x 10 degrees, as ROS) that the new set occupies, between ``min_particles``
