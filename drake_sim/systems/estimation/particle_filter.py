@@ -269,19 +269,17 @@ class ParticleFilter:
         r, a = r[ok], a[ok]
         if not (len(r) or len(a_none)):
             return
-        # Beam end points in the base frame.
-        bx = sensor[0] + r * np.cos(sensor[2] + a)
-        by = sensor[1] + r * np.sin(sensor[2] + a)
+        ux, uy = np.cos(sensor[2] + a), np.sin(sensor[2] + a)  # the hits' directions (base)
         table, resolution = self._field
         args = (self.map.origin, resolution, self.map.shape)
         z_rand_term = c.laser_z_rand / range_max
         if len(r) < c.laser_trace_hits_below:
-            u = (np.cos(sensor[2] + a), np.sin(sensor[2] + a))
             likelihood = traced_hit_likelihood(
-                self.particles, sensor[:2], *u, r, self._distance, *args,
+                self.particles, sensor[:2], ux, uy, r, self._distance, *args,
                 c.laser_sigma_hit, c.laser_z_hit, z_rand_term,
             )  # fmt: skip
         else:
+            bx, by = sensor[0] + r * ux, sensor[1] + r * uy  # end points in the base frame
             likelihood = scan_likelihood(
                 self.particles, bx, by, table, *args, c.laser_z_hit, z_rand_term
             )
