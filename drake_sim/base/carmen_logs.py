@@ -1,0 +1,82 @@
+"""CARMEN logs (``.clf``, ``.log``) as ``LaserLog``: ``FLASER`` and ``ROBOTLASER1`` lines (see
+``drake_sim.base.laser_logs`` for the formats); other lines are skipped."""
+
+from pathlib import Path
+
+import numpy as np
+
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.laser_scans import LaserLog, LaserScanRecord, gmapping_angles, no_echo_to_inf
+from drake_sim.base.planar import relative_pose
+
+
+def read_carmen(path: Path | str, *, range_max: float = 81.0) -> LaserLog:
+    """Reads a CARMEN log's ``FLASER`` and ``ROBOTLASER1`` lines (see the module's notes).
+
+    Raises:
+        ConfigError: a laser line that is cut short or holds something that is not a number
+            (file and line named), or a file that cannot be read as text.
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(errors="strict").splitlines()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ConfigError(f"{path}: cannot read it as a CARMEN log ({e})") from None
+    scans = []
+    kinds = set()
+    laser_pose = np.zeros(3)
+    for number, line in enumerate(lines, 1):
+        fields = line.split()
+        if not fields or fields[0] not in ("FLASER", "ROBOTLASER1"):
+            continue
+        try:
+            scan, laser = _carmen_scan(fields, range_max)
+        except (ValueError, IndexError) as e:
+            raise ConfigError(f"{path}:{number}: a malformed {fields[0]} line ({e})") from None
+        if laser is not None and fields[0] not in kinds:  # the first ROBOTLASER1's offset
+            laser_pose = relative_pose(scan.odometry, laser)
+        scans.append(scan)
+        kinds.add(fields[0])
+    kind = "/".join(sorted(kinds)) or "FLASER"
+    return LaserLog(path, scans, laser_pose, kind, kind)
+
+
+def _carmen_scan(fields: list[str], range_max: float) -> tuple[LaserScanRecord, list | None]:
+    """(the scan, the laser's own pose in the odometry frame or None) of one laser line."""
+    laser = None
+    if fields[0] == "FLASER":
+        count = int(fields[1])
+        if count < 2:
+            raise ValueError(f"{count} beams")
+        ranges = [float(v) for v in fields[2 : 2 + count]]
+        rest = fields[2 + count :]
+        if len(ranges) != count or len(rest) < 7:
+            raise ValueError("fewer fields than its beam count needs")
+        odometry = [float(v) for v in rest[3:6]]
+        time = float(rest[6])
+        angles = gmapping_angles(count)
+        maximum = range_max
+    else:  # ROBOTLASER1 type start fov resolution max accuracy remission_mode n r.. m rem..
+        start, resolution, maximum = float(fields[2]), float(fields[4]), float(fields[5])
+        count = int(fields[8])
+        ranges = [float(v) for v in fields[9 : 9 + count]]
+        remissions = int(fields[9 + count])
+        rest = fields[10 + count + remissions :]
+        if len(ranges) != count or len(rest) < 12 or count < 1:
+            raise ValueError("fewer fields than its beam counts need")
+        laser, odometry = [float(v) for v in rest[0:3]], [float(v) for v in rest[3:6]]
+        time = float(rest[11])
+        angles = start + resolution * np.arange(count)
+        maximum = min(maximum, range_max) if maximum > 0 else range_max
+    values = np.array([*odometry, *(laser or ()), time])
+    if not np.all(np.isfinite(values)):
+        raise ValueError("a pose or time that is not finite")
+    scan = LaserScanRecord(
+        time=time,
+        ranges=no_echo_to_inf(ranges, maximum),
+        angles=np.asarray(angles, dtype=float),
+        range_min=0.0,
+        range_max=float(maximum),
+        odometry=np.array(odometry),
+    )
+    return scan, laser

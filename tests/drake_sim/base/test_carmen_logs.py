@@ -1,0 +1,68 @@
+"""CARMEN logs as LaserLog: FLASER and ROBOTLASER1 lines, file order, malformed lines named."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drake_sim.base import carmen_logs as mut
+from drake_sim.base.errors import ConfigError
+from drake_sim.base.laser_scans import gmapping_angles
+
+
+def _flaser(ranges, odom, time):
+    values = " ".join(f"{r:.2f}" for r in ranges)
+    pose = " ".join(f"{v:.6f}" for v in odom)
+    return f"FLASER {len(ranges)} {values} {pose} {pose} {time:.6f} host {time + 0.01:.6f}"
+
+
+def _robotlaser(ranges, start, resolution, odom, laser, time):
+    values = " ".join(f"{r:.2f}" for r in ranges)
+    pose = " ".join(f"{v:.6f}" for v in odom)
+    lpose = " ".join(f"{v:.6f}" for v in laser)
+    return (
+        f"ROBOTLASER1 0 {start} {resolution * len(ranges)} {resolution} 30.0 0.01 0 "
+        f"{len(ranges)} {values} 2 0.5 0.5 {lpose} {pose} 0.1 0.0 0.5 0.5 0.0 "
+        f"{time:.6f} h {time:.6f}"
+    )
+
+
+def test_a_carmen_log_reads_in_file_order_with_its_odometry(tmp_path):
+    ranges = [1.0, 2.0, 81.91, 3.0]
+    lines = [
+        "# a comment",
+        "PARAM robot_front_laser_max 81.9 host 0",
+        "ODOM 0.1 0.2 0.3 0 0 0 5.0 host 5.0",
+        _flaser(ranges, [1.0, 2.0, 0.5], 10.000001),
+        _flaser(ranges, [1.5, 2.0, 0.6], 9.5),  # stamped earlier: file order stays
+        _robotlaser([1.0, 2.0, 3.0], -0.5, 0.5, [3.0, 4.0, 1.0], [3.1, 4.0, 1.0], 11.25),
+    ]
+    path = tmp_path / "run.clf"
+    path.write_text("\n".join(lines) + "\n")
+    log = mut.read_carmen(path)
+    assert [s.time for s in log.scans] == [10.000001, 9.5, 11.25]
+    first = log.scans[0]
+    np.testing.assert_allclose(first.odometry, [1.0, 2.0, 0.5])
+    assert math.isinf(first.ranges[2]) and first.ranges[3] == 3.0
+    np.testing.assert_allclose(first.angles, gmapping_angles(4))
+    robot = log.scans[2]
+    np.testing.assert_allclose(robot.angles, [-0.5, 0.0, 0.5])
+    np.testing.assert_allclose(robot.odometry, [3.0, 4.0, 1.0])
+    assert robot.range_max == 30.0
+    np.testing.assert_allclose(log.laser_pose, [0.1 * math.cos(1.0), -0.1 * math.sin(1.0), 0.0])
+    assert log.duration == pytest.approx(1.75)
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        "FLASER 4 1.0 2.0 3.0",  # cut short
+        "FLASER 2 1.0 abc 0 0 0 0 0 0 1.0 h 1.0",  # not a number
+        "FLASER 2 1.0 2.0 0 0 0 0 nan 0 1.0 h 1.0",  # odometry not finite
+    ],
+)
+def test_a_malformed_laser_line_is_named(tmp_path, line):
+    path = tmp_path / "bad.log"
+    path.write_text(_flaser([1.0, 2.0], [0, 0, 0], 1.0) + "\n" + line + "\n")
+    with pytest.raises(ConfigError, match=r"bad.log:2: a malformed FLASER line"):
+        mut.read_carmen(path)
