@@ -81,6 +81,8 @@ class LogOddsGrid:
         self._stamp = self._is_hit = None  # Scratch arrays (see _unique), made when needed.
         # Rows and columns of the cells touched so far: [row_min, row_max, col_min, col_max].
         self.known_box = None
+        # Likewise, the cells changed since ``take_changed_box`` last ran (None: none).
+        self.changed_box = None
         self.version = 0  # Incremented by every insert_scan.
 
     def __getstate__(self):
@@ -210,20 +212,26 @@ class LogOddsGrid:
         self._stamp[flat] = index
         return flat[self._stamp[flat] == index]
 
+    def take_changed_box(self) -> list[int] | None:
+        """[row_min, row_max, col_min, col_max] of the cells changed since the last call (None:
+        none), and starts again: what a map built from this grid must bring up to date."""
+        box, self.changed_box = self.changed_box, None
+        return box
+
     def _grow_box(self, flat: np.ndarray) -> None:
         if flat.size == 0:
             return
         rows, cols = np.divmod(flat, self.shape[1])
-        box = [rows.min(), rows.max(), cols.min(), cols.max()]
-        if self.known_box is not None:
-            old = self.known_box
-            box = [
-                min(box[0], old[0]),
-                max(box[1], old[1]),
-                min(box[2], old[2]),
-                max(box[3], old[3]),
-            ]
-        self.known_box = [int(v) for v in box]
+        box = [int(rows.min()), int(rows.max()), int(cols.min()), int(cols.max())]
+        self.known_box = _union(self.known_box, box)
+        self.changed_box = _union(self.changed_box, box)
+
+
+def _union(a: list[int] | None, b: list[int]) -> list[int]:
+    """The smallest [row_min, row_max, col_min, col_max] box holding boxes ``a`` and ``b``."""
+    if a is None:
+        return list(b)
+    return [min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])]
 
 
 def observable(truth: OccupancyMap) -> tuple[np.ndarray, np.ndarray]:

@@ -329,10 +329,18 @@ class ScanMatchingSlam:
         self.map_updates += 1
 
     def _pyramid(self) -> list[MatchMap]:
+        """The levels matched against, up to date: each made once from its grid and then
+        brought up to date around the cells a map update changed (``MatchMap.updated``), so
+        the cost of an update does not grow with the map (made again whole with
+        ``smoothing``)."""
         for k, grid in enumerate(self.grids):
             if self._match_versions[k] != grid.version:
-                self._match_maps[k] = MatchMap.from_grid(
-                    grid, self.config.smoothing, field=self.config.field
-                )
+                changed = grid.take_changed_box()
+                level = self._match_maps[k]
+                if level is None or self.config.smoothing > 0 or changed is None:
+                    level = MatchMap.from_grid(grid, self.config.smoothing, field=self.config.field)
+                else:
+                    level = level.updated(grid, changed, field=self.config.field)
+                self._match_maps[k] = level
                 self._match_versions[k] = grid.version
         return self._match_maps

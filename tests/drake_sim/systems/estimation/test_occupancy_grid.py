@@ -213,3 +213,16 @@ def test_known_fraction():
     )
     elsewhere = OccupancyMap(truth.cells, 0.05, (10.0, 10.0, 0.0))
     assert mut.known_fraction(elsewhere, truth) == 0.0
+
+
+def test_the_changed_box_holds_every_cell_changed_since_it_was_taken():
+    grid = mut.LogOddsGrid(resolution=0.1, size=(10.0, 10.0), origin=(-5.0, -5.0))
+    assert grid.take_changed_box() is None
+    before = grid.log_odds.copy()
+    grid.insert_scan((0.0, 0.0, 0.0), [1.0], [0.0], 3.5)
+    grid.insert_scan((-2.0, 1.0, 0.0), [0.5], [math.pi / 2], 3.5)
+    box = grid.take_changed_box()
+    rows, cols = np.nonzero(grid.log_odds != before)
+    assert box == [rows.min(), rows.max(), cols.min(), cols.max()]
+    assert grid.take_changed_box() is None
+    assert grid.known_box == box  # the first changes are all the known cells

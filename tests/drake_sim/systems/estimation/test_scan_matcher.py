@@ -197,3 +197,41 @@ def test_levels_are_read_where_their_grids_put_the_hits():
         error = math.hypot(*(shifted.pose[:2] - pose[:2]))
         assert error < 0.01 and abs(math.degrees(shifted.pose[2] - pose[2])) < 0.3
         assert result.scores[0] < shifted.scores[0]  # the ends sit half a cell off the peaks
+
+
+@pytest.mark.parametrize("field", [1.0, 0.0])
+def test_a_level_brought_up_to_date_matches_one_made_again_whole(field):
+    """``MatchMap.updated`` after each map update: the same values and gradients as
+    ``from_grid`` on the whole grid wherever a point can weigh (seen cells and their
+    neighbours), while the level grows as the robot sees more of the room."""
+    truth = helpers.drive(helpers.ROOM_ROUTE, helpers.ROOM_START)
+    ranges, angles = helpers.lidar_scans(helpers.room(), truth, seed=0)
+    grid = LogOddsGrid(resolution=0.05, size=(30.0, 30.0), origin=(-15.0, -15.0), hit_offset=0.5)
+    level, shapes = None, set()
+    rng = np.random.default_rng(0)
+    for k in range(0, len(truth), 9):
+        grid.insert_scan(truth[k], ranges[k], angles, 3.5)
+        changed = grid.take_changed_box()
+        assert changed is not None and grid.take_changed_box() is None
+        if level is None:
+            level = mut.MatchMap.from_grid(grid, field=field)
+        else:
+            level = level.updated(grid, changed, field=field)
+        shapes.add(level.values.shape)
+        whole = mut.MatchMap.from_grid(grid, field=field)
+        rows, cols = np.nonzero(whole.known)
+        # Points off the cell centres (where a one-sided gradient may pick either side).
+        u, v = rng.uniform(0.1, 0.9, (2, len(rows)))
+        xy = np.stack(
+            [
+                whole.origin[0] + (cols - 1 + u) * whole.resolution,
+                whole.origin[1] + (rows - 1 + v) * whole.resolution,
+            ],
+            -1,
+        )
+        np.testing.assert_array_equal(level.is_known(xy), whole.is_known(xy))
+        expected, expected_gradient = whole.interpolate(xy)
+        value, gradient = level.interpolate(xy)
+        np.testing.assert_allclose(value, expected, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(gradient, expected_gradient, rtol=0, atol=1e-10)
+    assert len(shapes) > 1  # it grew
