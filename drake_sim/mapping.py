@@ -10,17 +10,27 @@ ends before its route does (Ctrl-C, SIGTERM, ``--duration``, a failure) keeps an
 ``--out`` and writes ``NAME.partial.pgm`` / ``.yaml`` beside it instead. Exit
 codes: 0 for a completed run, 1 if the route was not completed (or the simulation failed),
 2 for bad input.
+
+With ``--log FILE`` (a ROS 1 or ROS 2 bag, or a CARMEN log) it maps a recorded log instead,
+offline, with the same SLAM: ``--out``, ``--trajectory`` (TUM) and ``--report`` are written at
+the end (``drake_sim.runs.log_mapping``).
 """
 
 import sys
 
 from drake_sim.base import cli
-from drake_sim.runs import command
+from drake_sim.runs import command, log_mapping
 from drake_sim.runs.mapping import RECIPE
 
 
 def main(argv=None) -> int:
-    return command.main(RECIPE, __doc__, argv)
+    parser = command.parser(RECIPE, __doc__)
+    log_mapping.add_flags(parser)
+    args = parser.parse_args(argv)
+    log_mapping.check_flags(args)
+    if args.log is not None:
+        return log_mapping.run(RECIPE, args)
+    return command.run_app(RECIPE, args)
 
 
 if __name__ == "__main__":

@@ -58,7 +58,8 @@ def read_log(
             CARMEN: 81.0 m, below SICK's 81.9 m "no echo").
 
     Raises:
-        ConfigError: the file is missing, malformed, or has no scans; a named topic is absent.
+        ConfigError: the file is missing, malformed, or has no scans; a named topic is absent
+            (or named for a CARMEN log).
     """
     path = Path(path)
     if angles not in ("log", "gmapping"):
@@ -68,6 +69,10 @@ def read_log(
     if not path.exists():
         raise ConfigError(f"{path}: no such log")
     if path.is_file() and path.suffix.lower() in CARMEN_SUFFIXES:
+        if scan_topic is not None or odom_topic is not None:
+            raise ConfigError(
+                f"{path}: a CARMEN log has no topics (--scan-topic, --odom-topic go with a bag)"
+            )
         log = read_carmen(path, range_max=81.0 if range_max is None else range_max)
     else:
         log = read_bag(path, scan_topic=scan_topic, odom_topic=odom_topic, range_max=range_max)

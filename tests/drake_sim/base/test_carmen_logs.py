@@ -8,23 +8,7 @@ import pytest
 from drake_sim.base import carmen_logs as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_scans import gmapping_angles
-
-
-def _flaser(ranges, odom, time):
-    values = " ".join(f"{r:.2f}" for r in ranges)
-    pose = " ".join(f"{v:.6f}" for v in odom)
-    return f"FLASER {len(ranges)} {values} {pose} {pose} {time:.6f} host {time + 0.01:.6f}"
-
-
-def _robotlaser(ranges, start, resolution, odom, laser, time):
-    values = " ".join(f"{r:.2f}" for r in ranges)
-    pose = " ".join(f"{v:.6f}" for v in odom)
-    lpose = " ".join(f"{v:.6f}" for v in laser)
-    return (
-        f"ROBOTLASER1 0 {start} {resolution * len(ranges)} {resolution} 30.0 0.01 0 "
-        f"{len(ranges)} {values} 2 0.5 0.5 {lpose} {pose} 0.1 0.0 0.5 0.5 0.0 "
-        f"{time:.6f} h {time:.6f}"
-    )
+from tests import log_helpers as lh
 
 
 def test_a_carmen_log_reads_in_file_order_with_its_odometry(tmp_path):
@@ -33,9 +17,9 @@ def test_a_carmen_log_reads_in_file_order_with_its_odometry(tmp_path):
         "# a comment",
         "PARAM robot_front_laser_max 81.9 host 0",
         "ODOM 0.1 0.2 0.3 0 0 0 5.0 host 5.0",
-        _flaser(ranges, [1.0, 2.0, 0.5], 10.000001),
-        _flaser(ranges, [1.5, 2.0, 0.6], 9.5),  # stamped earlier: file order stays
-        _robotlaser([1.0, 2.0, 3.0], -0.5, 0.5, [3.0, 4.0, 1.0], [3.1, 4.0, 1.0], 11.25),
+        lh.flaser_line(ranges, [1.0, 2.0, 0.5], 10.000001),
+        lh.flaser_line(ranges, [1.5, 2.0, 0.6], 9.5),  # stamped earlier: file order stays
+        lh.robotlaser_line([1.0, 2.0, 3.0], -0.5, 0.5, [3.0, 4.0, 1.0], [3.1, 4.0, 1.0], 11.25),
     ]
     path = tmp_path / "run.clf"
     path.write_text("\n".join(lines) + "\n")
@@ -63,6 +47,6 @@ def test_a_carmen_log_reads_in_file_order_with_its_odometry(tmp_path):
 )
 def test_a_malformed_laser_line_is_named(tmp_path, line):
     path = tmp_path / "bad.log"
-    path.write_text(_flaser([1.0, 2.0], [0, 0, 0], 1.0) + "\n" + line + "\n")
+    path.write_text(lh.flaser_line([1.0, 2.0], [0, 0, 0], 1.0) + "\n" + line + "\n")
     with pytest.raises(ConfigError, match=r"bad.log:2: a malformed FLASER line"):
         mut.read_carmen(path)

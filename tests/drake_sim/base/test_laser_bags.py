@@ -86,24 +86,22 @@ def _messages(odom=True):
     return items
 
 
-def _write_ros1(path, items):
-    with Writer1(path) as writer:
+def _write(writer, serialize, path, items):
+    with writer as w:
         conns = {}
         for topic, kind, t, msg in items:
             if topic not in conns:
-                conns[topic] = writer.add_connection(topic, kind, typestore=STORE)
-            writer.write(conns[topic], int(t * 1e9), STORE.serialize_ros1(msg, kind))
+                conns[topic] = w.add_connection(topic, kind, typestore=STORE)
+            w.write(conns[topic], int(t * 1e9), serialize(msg, kind))
     return path
+
+
+def _write_ros1(path, items):
+    return _write(Writer1(path), STORE.serialize_ros1, path, items)
 
 
 def _write_ros2(path, items):
-    with Writer2(path, version=8) as writer:
-        conns = {}
-        for topic, kind, t, msg in items:
-            if topic not in conns:
-                conns[topic] = writer.add_connection(topic, kind, typestore=STORE)
-            writer.write(conns[topic], int(t * 1e9), STORE.serialize_cdr(msg, kind))
-    return path
+    return _write(Writer2(path, version=8), STORE.serialize_cdr, path, items)
 
 
 @pytest.mark.parametrize("writer", [_write_ros1, _write_ros2], ids=["ros1", "ros2"])

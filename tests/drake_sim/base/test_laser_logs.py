@@ -6,23 +6,7 @@ import pytest
 from drake_sim.base import laser_logs as mut
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_scans import gmapping_angles
-
-
-def _flaser(ranges, odom, time):
-    values = " ".join(f"{r:.2f}" for r in ranges)
-    pose = " ".join(f"{v:.6f}" for v in odom)
-    return f"FLASER {len(ranges)} {values} {pose} {pose} {time:.6f} host {time + 0.01:.6f}"
-
-
-def _robotlaser(ranges, start, resolution, odom, laser, time):
-    values = " ".join(f"{r:.2f}" for r in ranges)
-    pose = " ".join(f"{v:.6f}" for v in odom)
-    lpose = " ".join(f"{v:.6f}" for v in laser)
-    return (
-        f"ROBOTLASER1 0 {start} {resolution * len(ranges)} {resolution} 30.0 0.01 0 "
-        f"{len(ranges)} {values} 2 0.5 0.5 {lpose} {pose} 0.1 0.0 0.5 0.5 0.0 "
-        f"{time:.6f} h {time:.6f}"
-    )
+from tests import log_helpers as lh
 
 
 def test_a_log_without_scans_or_file_is_refused(tmp_path):
@@ -34,11 +18,13 @@ def test_a_log_without_scans_or_file_is_refused(tmp_path):
         mut.read_log(tmp_path / "missing.clf")
     with pytest.raises(ConfigError, match="angles must be"):
         mut.read_log(empty, angles="sick")
+    with pytest.raises(ConfigError, match="a CARMEN log has no topics"):
+        mut.read_log(empty, scan_topic="/scan")
 
 
 def test_gmapping_angles_replace_a_logs_own(tmp_path):
     path = tmp_path / "r.clf"
-    path.write_text(_robotlaser([1.0] * 6, -0.3, 0.1, [0, 0, 0], [0, 0, 0], 1.0) + "\n")
+    path.write_text(lh.robotlaser_line([1.0] * 6, -0.3, 0.1, [0, 0, 0], [0, 0, 0], 1.0) + "\n")
     log = mut.read_log(path, angles="gmapping")
     np.testing.assert_allclose(log.scans[0].angles, gmapping_angles(6))
 

@@ -1,0 +1,127 @@
+"""Offline SLAM on a recorded log: every scan of a ``LaserLog`` (``drake_sim.base.laser_logs``)
+fed in file order into ``ScanMatchingSlam``, as slam_toolbox and Cartographer run on a bag.
+
+The odometry's motion between scans is the prediction. A log's odometry can be wrong in ways
+the matcher cannot bridge: a scan before the first odometry message has no motion; a step that
+moves more than ``JUMP_DISTANCE`` m or turns more than ``JUMP_ANGLE`` rad between two scans (MIT
+CSAIL's logged odometry jumps 0.95 m and 85 degrees) is counted as a jump and predicts no motion,
+leaving the scan matcher to find the pose. The map's side is the odometry's extent plus twice
+the scans' useful range (``map_side``), at least the config's ``map_size``. Loop closure is not
+here yet (issue #40's second deliverable): the trajectory is the scan matcher's.
+"""
+
+import dataclasses as dc
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from drake_sim.base import cli
+from drake_sim.base.laser_scans import LaserLog
+from drake_sim.base.planar import compose, relative_pose
+from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, SlamConfig
+
+JUMP_DISTANCE = 0.5
+"""m: an odometry step between two scans longer than this is a jump (no motion predicted)."""
+JUMP_ANGLE = math.radians(45.0)
+"""rad: likewise for a turn."""
+USEFUL_RANGE = 30.0
+"""m: the farthest returns ``map_side`` makes room for around the odometry's extent ..."""
+REACH_QUANTILE = 0.99
+"""... and the share of the log's returns it makes room for (a few stray long ones do not
+double the map)."""
+MAP_SIDE_STEP = 10.0
+"""m: ``map_side`` rounds up to a multiple of this."""
+
+
+@dc.dataclass
+class LogSlamResult:
+    """What a log's SLAM run produced.
+
+    Attributes:
+        slam: the SLAM, its map and trajectory (one pose per processed scan).
+        times: (n,) s, the processed scans' timestamps as logged.
+        poses: (n, 3) the base's pose [x, y, yaw] after each of them (m, m, rad).
+        scans: scans processed (all of the log's unless stopped).
+        odometry_jumps: odometry steps taken as jumps (no motion predicted).
+        stopped: True if ``should_stop`` ended it before the last scan.
+    """
+
+    slam: ScanMatchingSlam
+    times: np.ndarray
+    poses: np.ndarray
+    scans: int
+    odometry_jumps: int
+    stopped: bool
+
+
+def map_side(log: LaserLog, config: SlamConfig) -> float:
+    """m: the side of a square map that holds the log's odometry extent plus the returns around
+    it (``REACH_QUANTILE`` of them, up to ``USEFUL_RANGE``), rounded up to ``MAP_SIDE_STEP``;
+    at least ``config.map_size``."""
+    odometry = np.array([s.odometry[:2] for s in log.scans if s.odometry is not None])
+    returns = np.concatenate([s.ranges[np.isfinite(s.ranges)] for s in log.scans])
+    reach = min(float(np.quantile(returns, REACH_QUANTILE)), USEFUL_RANGE) if returns.size else 0.0
+    extent = float(np.ptp(odometry, axis=0).max()) if len(odometry) else 0.0
+    side = MAP_SIDE_STEP * math.ceil((extent + 2.0 * reach + 2.0) / MAP_SIDE_STEP)
+    return max(float(config.map_size), side)
+
+
+def run_log_slam(
+    log: LaserLog,
+    config: SlamConfig,
+    *,
+    laser_pose=None,
+    should_stop: Callable[[], bool] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> LogSlamResult:
+    """Runs ``ScanMatchingSlam`` over every scan of ``log`` in file order.
+
+    Args:
+        log: the scans with their odometry.
+        config: the SLAM's parameters; its ``map_size`` grows to ``map_side`` if smaller.
+        laser_pose: [x, y, yaw] of the sensor on the base (None: the log's).
+        should_stop: polled between scans; True ends the run early (``stopped``), as does
+            a user stop (Ctrl-C, SIGTERM: ``cli.is_stop``) raised while a scan is processed.
+        progress: called with (scans done, scans in all) every 100 scans.
+    """
+    config = dc.replace(config, map_size=map_side(log, config))
+    sensor = log.laser_pose if laser_pose is None else np.asarray(laser_pose, dtype=float)
+    first = next((s.odometry for s in log.scans if s.odometry is not None), np.zeros(3))
+    slam = ScanMatchingSlam(config, initial_pose=first, X_base_sensor=sensor)
+    odom = np.array(first, dtype=float)  # the odometry as the SLAM is fed it (jumps removed)
+    last = None  # the log's odometry at the previous scan
+    jumps = 0
+    times = []
+    stopped = False
+    try:
+        for k, scan in enumerate(log.scans):
+            if should_stop is not None and should_stop():
+                stopped = True
+                break
+            if scan.odometry is not None:
+                if last is not None:
+                    step = relative_pose(last, scan.odometry)
+                    if math.hypot(step[0], step[1]) > JUMP_DISTANCE or abs(step[2]) > JUMP_ANGLE:
+                        jumps += 1
+                    else:
+                        odom = compose(odom, step)
+                last = scan.odometry
+            slam.update(
+                scan.ranges,
+                scan.angles,
+                odom,
+                range_max=scan.range_max,
+                range_min=scan.range_min,
+                time=scan.time,
+            )
+            times.append(scan.time)
+            if progress is not None and (k + 1) % 100 == 0:
+                progress(k + 1, len(log.scans))
+    except BaseException as e:  # a stop lands wherever the scan's processing was
+        if not cli.is_stop(e):
+            raise
+        stopped = True
+    n = min(len(times), slam.scans)  # a stop between the update and its time: drop that scan
+    poses = slam.trajectory[:n]
+    return LogSlamResult(slam, np.array(times[:n], dtype=float), poses, n, jumps, stopped)

@@ -1,0 +1,61 @@
+"""Offline SLAM over a recorded log: the trajectory follows the truth, odometry jumps are
+bridged, a stop ends the run with what it has, the map is sized to the log."""
+
+import dataclasses as dc
+
+import numpy as np
+
+from drake_sim.systems.estimation import log_slam as mut
+from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from tests import log_helpers as lh
+
+
+def test_the_trajectory_follows_the_truth_where_the_odometry_drifts():
+    truth, odometry, ranges, angles = lh.room_drive()
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    result = mut.run_log_slam(log, SlamConfig())
+    assert result.scans == len(truth) and not result.stopped and result.odometry_jumps == 0
+    np.testing.assert_allclose(result.times, [s.time for s in log.scans])
+    assert lh.rmse(result.poses, truth) < 0.03
+    assert lh.rmse(odometry, truth) > 2 * lh.rmse(result.poses, truth)  # the drift removed
+
+
+def test_an_odometry_jump_is_bridged_by_the_scan_matcher():
+    truth, odometry, ranges, angles = lh.room_drive()
+    jumped = odometry.copy()
+    jumped[100:, :2] += [1.5, -0.8]  # the log's odometry leaps once, as MIT CSAIL's does
+    result = mut.run_log_slam(lh.laser_log(truth, jumped, ranges, angles), SlamConfig())
+    assert result.odometry_jumps == 1
+    assert lh.rmse(result.poses, truth) < 0.03
+
+
+def test_scans_before_the_first_odometry_predict_no_motion():
+    truth, odometry, ranges, angles = lh.room_drive()
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    scans = [dc.replace(s, odometry=None) if k < 3 else s for k, s in enumerate(log.scans)]
+    result = mut.run_log_slam(dc.replace(log, scans=scans), SlamConfig())
+    assert result.scans == len(truth)
+    # The map's frame starts at the first odometry (the fourth scan's): compare the shapes.
+    shifted = result.poses - result.poses[0] + truth[0]
+    assert lh.rmse(shifted, truth) < 0.03
+
+
+def test_a_stop_ends_the_run_with_the_scans_so_far():
+    truth, odometry, ranges, angles = lh.room_drive()
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    calls = []
+    result = mut.run_log_slam(
+        log, SlamConfig(), should_stop=lambda: len(calls.append(0) or calls) > 40
+    )
+    assert result.stopped and result.scans == 40
+    assert len(result.poses) == len(result.times) == 40
+
+
+def test_the_map_is_sized_to_the_log():
+    truth, odometry, ranges, angles = lh.room_drive()
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    assert mut.map_side(log, SlamConfig()) == 30.0  # a small room: the config's size
+    far = [dc.replace(s, odometry=s.odometry * [20.0, 20.0, 1.0]) for s in log.scans]
+    side = mut.map_side(dc.replace(log, scans=far), SlamConfig())
+    extent = np.ptp(odometry[:, :2] * 20.0, axis=0).max()
+    assert side >= extent + 2 * 3.0 and side % mut.MAP_SIDE_STEP == 0
