@@ -46,26 +46,6 @@ from scipy import ndimage
 from drake_sim.base.planar import wrap_angle
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 
-FIELD_REACH = 8.0
-"""Field widths: ``MatchMap.updated`` computes the likelihood field again this far around the
-cells that changed (exp(-8^2 / 2) = 1.3e-14: the field is 0 beyond)."""
-GROW_CELLS = 64
-"""Cells: ``MatchMap.updated`` grows a level by at least this much on the side it passes."""
-
-
-def _box_around(box, pad: int, shape) -> list[int]:
-    """[row_lo, row_hi, col_lo, col_hi) (``hi`` excluded) of the inclusive box
-    [row_min, row_max, col_min, col_max] with ``pad`` cells more each way, clipped to ``shape``
-    (the whole grid for None)."""
-    if box is None:
-        return [0, shape[0], 0, shape[1]]
-    return [
-        max(box[0] - pad, 0),
-        min(box[1] + pad + 1, shape[0]),
-        max(box[2] - pad, 0),
-        min(box[3] + pad + 1, shape[1]),
-    ]
-
 
 class MatchMap:
     """One level of the pyramid: values in [0, 1] at cell centres, interpolated.
@@ -125,69 +105,6 @@ class MatchMap:
         origin = (grid.origin[0] + c0 * grid.resolution, grid.origin[1] + r0 * grid.resolution)
         known = ndimage.binary_dilation(log_odds != 0, np.ones((3, 3), bool))
         return cls(p, grid.resolution, origin, known)
-
-    def updated(
-        self, grid: LogOddsGrid, changed, *, field: float = 0.0, margin: int = 4
-    ) -> "MatchMap":
-        """This level brought up to date with ``grid`` (which it was made from) after the cells
-        in ``changed`` ([row_min, row_max, col_min, col_max], ``take_changed_box``) changed:
-        the same values as ``from_grid(grid, field=field, margin=margin)`` (no smoothing) at
-        every seen cell and the cells next to them, for a cost that grows with the changed
-        cells, not with the map. Only the cells within the field's reach of a change are
-        computed again (its distance transform over that window plus its reach; beyond
-        ``FIELD_REACH`` widths the field is below 1e-13 and taken as 0); the level grows, by
-        at least ``GROW_CELLS``, when the seen cells pass its edge. Returns this level,
-        changed in place, or a grown copy. Where a window holds no occupied cell the field is 0
-        (``from_grid``: 0.5 everywhere while the whole grid has none)."""
-        res = grid.resolution
-        r0 = round((self.origin[1] - grid.origin[1]) / res)
-        c0 = round((self.origin[0] - grid.origin[0]) / res)
-        rows, cols = self.values.shape[0] - 2, self.values.shape[1] - 2
-        need = _box_around(grid.known_box, margin, grid.shape)
-        level = self
-        if need[0] < r0 or need[1] > r0 + rows or need[2] < c0 or need[3] > c0 + cols:
-            level, r0, c0 = self._grown(grid, need, r0, c0, field)
-            rows, cols = level.values.shape[0] - 2, level.values.shape[1] - 2
-        reach = max(1, math.ceil(FIELD_REACH * field)) if field > 0 else 1
-        w = _box_around(changed, reach, grid.shape)  # the cells to compute again
-        w = [max(w[0], r0), min(w[1], r0 + rows), max(w[2], c0), min(w[3], c0 + cols)]
-        if w[0] >= w[1] or w[2] >= w[3]:
-            return level
-        e = _box_around([w[0], w[1] - 1, w[2], w[3] - 1], reach, grid.shape)  # and their reach
-        log_odds = grid.log_odds[e[0] : e[1], e[2] : e[3]]
-        inner = (slice(w[0] - e[0], w[1] - e[0]), slice(w[2] - e[2], w[3] - e[2]))
-        if field > 0:
-            occupied = log_odds > 0
-            if occupied.any():
-                distance = ndimage.distance_transform_edt(~occupied)[inner]
-                p = np.exp(-0.5 * (distance / field) ** 2)
-            else:
-                p = np.zeros((w[1] - w[0], w[3] - w[2]))
-        else:
-            p = 1.0 / (1.0 + np.exp(-log_odds[inner].astype(np.float64)))
-        known = ndimage.binary_dilation(log_odds != 0, np.ones((3, 3), bool))[inner]
-        target = (slice(w[0] - r0 + 1, w[1] - r0 + 1), slice(w[2] - c0 + 1, w[3] - c0 + 1))
-        level.values[target] = p
-        level.known[target] = known
-        return level
-
-    def _grown(self, grid: LogOddsGrid, need, r0: int, c0: int, field: float):
-        """(a copy of this level over ``need`` and ``GROW_CELLS`` more each way, clipped to the
-        grid, with this level's cells kept and the new ones unseen; its row and column)."""
-        rows, cols = self.values.shape[0] - 2, self.values.shape[1] - 2
-        lo_r = min(need[0] - GROW_CELLS, r0)
-        hi_r = max(need[1] + GROW_CELLS, r0 + rows)
-        lo_c = min(need[2] - GROW_CELLS, c0)
-        hi_c = max(need[3] + GROW_CELLS, c0 + cols)
-        lo_r, lo_c = max(lo_r, 0), max(lo_c, 0)
-        hi_r, hi_c = min(hi_r, grid.shape[0]), min(hi_c, grid.shape[1])
-        values = np.full((hi_r - lo_r, hi_c - lo_c), 0.0 if field > 0 else 0.5)
-        known = np.zeros(values.shape, bool)
-        inner = (slice(r0 - lo_r, r0 - lo_r + rows), slice(c0 - lo_c, c0 - lo_c + cols))
-        values[inner] = self.values[1:-1, 1:-1]
-        known[inner] = self.known[1:-1, 1:-1]
-        origin = (grid.origin[0] + lo_c * grid.resolution, grid.origin[1] + lo_r * grid.resolution)
-        return MatchMap(values, grid.resolution, origin, known), lo_r, lo_c
 
     def interpolate(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear value M (n,) and gradient dM/d(x, y) (n, 2), 1/m, at world points (n, 2)."""

@@ -49,6 +49,7 @@ from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap, save_map
 from drake_sim.base.planar import compose, relative_pose
+from drake_sim.systems.estimation.match_updates import update_level
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 from drake_sim.systems.estimation.scan_matcher import (
     MatchMap,
@@ -184,6 +185,8 @@ class ScanMatchingSlam:
             )
             for k in range(-config.fine_levels, config.levels)
         ]
+        for grid in self.grids:
+            grid.track_changes = True  # for the match levels' updates (``_pyramid``)
         self.map_level = config.fine_levels  # Index in ``grids`` of the map at ``resolution``.
         self._match_maps: list[MatchMap | None] = [None] * len(self.grids)
         self._match_versions = [-1] * len(self.grids)
@@ -330,17 +333,17 @@ class ScanMatchingSlam:
 
     def _pyramid(self) -> list[MatchMap]:
         """The levels matched against, up to date: each made once from its grid and then
-        brought up to date around the cells a map update changed (``MatchMap.updated``), so
+        brought up to date with what a map update changed (``match_updates.update_level``), so
         the cost of an update does not grow with the map (made again whole with
         ``smoothing``)."""
         for k, grid in enumerate(self.grids):
             if self._match_versions[k] != grid.version:
-                changed = grid.take_changed_box()
+                changes, box = grid.take_changes(), grid.take_changed_box()
                 level = self._match_maps[k]
-                if level is None or self.config.smoothing > 0 or changed is None:
+                if level is None or self.config.smoothing > 0:
                     level = MatchMap.from_grid(grid, self.config.smoothing, field=self.config.field)
                 else:
-                    level = level.updated(grid, changed, field=self.config.field)
+                    level = update_level(level, grid, changes, box, field=self.config.field)
                 self._match_maps[k] = level
                 self._match_versions[k] = grid.version
         return self._match_maps

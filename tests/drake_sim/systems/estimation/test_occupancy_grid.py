@@ -226,3 +226,21 @@ def test_the_changed_box_holds_every_cell_changed_since_it_was_taken():
     assert box == [rows.min(), rows.max(), cols.min(), cols.max()]
     assert grid.take_changed_box() is None
     assert grid.known_box == box  # the first changes are all the known cells
+
+
+def test_tracked_changes_list_the_cells_that_became_occupied_free_or_seen():
+    grid = mut.LogOddsGrid(resolution=0.1, size=(10.0, 10.0), origin=(-5.0, -5.0))
+    grid.insert_scan((0.0, 0.0, 0.0), [1.0], [0.0], 3.5)
+    assert all(part.size == 0 for part in grid.take_changes())  # off: nothing kept
+    grid.track_changes = True
+    before = grid.log_odds.copy()
+    grid.insert_scan((0.0, 0.0, 0.0), [2.0], [0.0], 3.5)  # the wall at 1 m is now seen through
+    for _ in range(3):
+        grid.insert_scan((0.0, 0.0, 0.0), [2.0], [0.0], 3.5)
+    became, stopped, seen = grid.take_changes()
+    after = grid.log_odds.ravel()
+    flat = before.ravel()
+    np.testing.assert_array_equal(np.unique(became), np.nonzero((flat <= 0) & (after > 0))[0])
+    np.testing.assert_array_equal(np.unique(stopped), np.nonzero((flat > 0) & (after <= 0))[0])
+    np.testing.assert_array_equal(np.unique(seen), np.nonzero((flat == 0) & (after != 0))[0])
+    assert stopped.size == 1 and all(part.size == 0 for part in grid.take_changes())
