@@ -156,6 +156,18 @@ SECTIONS = (
         "`$DRAKE_SIM_REAL_MAPS`).",
     ),
     Section(
+        "slam_logs",
+        "SLAM on real logs",
+        _script("slam_logs"),
+        "Offline SLAM (`python -m drake_sim.mapping --log`) on the classic real 2D laser logs of "
+        "Kümmerle et al. 2009 (Intel, Freiburg 079 and ACES from their ROS 1 bags with "
+        "GMapping's beam angles, MIT CSAIL from its CARMEN log), the mapping scenario's SLAM "
+        "defaults, no loop closure yet; errors on each log's ground-truth relations, with "
+        "GMapping's, graph mapping's and Cartographer's published translational errors beside. "
+        "Needs the logs (`shared/benchmarks/slam_carmen` beside the checkout, or "
+        "`$DRAKE_SIM_SLAM_LOGS`).",
+    ),
+    Section(
         "amcl",
         "AMCL",
         _script("amcl", "--seeds", "3"),

@@ -1,16 +1,19 @@
 """Offline SLAM on the classic real 2D laser logs, scored as the published systems are:
-``python benchmarks/slam_logs_benchmark.py --data ../shared/benchmarks/slam_carmen``.
+``python benchmarks/slam_logs_benchmark.py [--data DIR]``.
 
-For each log of Kümmerle et al. 2009's benchmark that is in ``--data`` (Intel, Freiburg 079 and
+For each log of Kümmerle et al. 2009's benchmark that is in ``--data`` (default
+``$DRAKE_SIM_SLAM_LOGS``, else ``shared/benchmarks/slam_carmen`` beside the checkout: Intel,
+Freiburg 079 and
 ACES as ROS 1 bags with GMapping's beam angles, MIT CSAIL as its CARMEN log; the data are never
 copied into the repository), every scan goes through ``ScanMatchingSlam`` with the mapping
 scenario's defaults, as ``python -m drake_sim.mapping --log`` runs it, and the trajectory is
 scored on the log's relations (``drake_sim.tools.slam_relations``: mean and standard deviation
 of the translational and rotational errors). Printed per log: scans, the log's duration, the
 wall time and the real-time factor, the cost per scan (median and 95th percentile, ms), the
-errors, the matches rejected and odometry jumps. ``--limit N`` maps the first N scans only
-(relations outside them are counted as missing); ``--json FILE`` writes the table. Not a test:
-speeds depend on the machine.
+errors, the matches rejected and odometry jumps, beside the published translational errors
+(``PUBLISHED``). ``--limit N`` maps the first N scans only (relations outside them are counted
+as missing); ``--json FILE`` writes the figures for ``python -m benchmarks.report``. Not a
+test: speeds depend on the machine.
 """
 
 import argparse
@@ -18,6 +21,7 @@ import dataclasses as dc
 import json
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -30,6 +34,13 @@ from drake_sim.systems.estimation.log_slam import run_log_slam
 from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
 from drake_sim.tools.slam_relations import load_relations, score
 
+PUBLISHED = {  # m, mean translational error: GMapping, graph mapping (Kümmerle et al. 2009,
+    # Table 2), Cartographer (Hess et al. 2016, Table I)
+    "intel": (0.070, 0.031, 0.0229),
+    "fr079": (0.061, 0.056, 0.0452),
+    "aces": (0.060, 0.044, 0.0375),
+    "mit-csail": (0.049, 0.004, 0.0319),
+}
 LOGS = {  # name: (file, beam angles, relations)
     "intel": ("intel.orig.bag", "gmapping", "intel.relations"),
     "fr079": ("fr079.orig.bag", "gmapping", "fr079.relations"),
@@ -72,20 +83,33 @@ def run_one(data: Path, name: str, limit: int | None) -> dict:
     }
 
 
+def data_folder(given: Path | None) -> Path:
+    """``given``, else ``$DRAKE_SIM_SLAM_LOGS``, else ``shared/benchmarks/slam_carmen`` beside
+    the checkout."""
+    if given is not None:
+        return given
+    if os.environ.get("DRAKE_SIM_SLAM_LOGS"):
+        return Path(os.environ["DRAKE_SIM_SLAM_LOGS"])
+    return Path(__file__).resolve().parents[2] / "shared" / "benchmarks" / "slam_carmen"
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--data", type=Path, default=Path("../shared/benchmarks/slam_carmen"))
+    p.add_argument("--data", type=Path, help="the logs' folder")
     p.add_argument("--logs", nargs="+", choices=sorted(LOGS), default=list(LOGS))
     p.add_argument("--limit", type=int, help="the first N scans of each log only")
     p.add_argument("--json", type=output_file("json"), help="write the table here")
     args = p.parse_args()
-    present = [n for n in args.logs if (args.data / LOGS[n][0]).exists()]
+    data = data_folder(args.data)
+    present = [n for n in args.logs if (data / LOGS[n][0]).exists()]
     if not present:
-        raise SystemExit(f"no logs in {args.data} (the shared SLAM datasets)")
+        print(f"error: no logs in {data} (give --data DIR)", file=sys.stderr)
+        raise SystemExit(2)
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores")
     rows = []
     for name in present:
-        row = run_one(args.data, name, args.limit)
+        row = run_one(data, name, args.limit)
+        row.update(zip(("gmapping_m", "graph_m", "cartographer_m"), PUBLISHED[name], strict=True))
         rows.append(row)
         print(
             f"{name:10s} {row['scans']:6d} scans, {row['log_duration_s']:7.1f} s of log in "
@@ -97,8 +121,34 @@ def main() -> None:
             f"{row['rejected_matches']} rejected, {row['odometry_jumps']} jumps",
             flush=True,
         )
+    columns = [
+        ["log", "log", "", ""],
+        ["scans", "scans", "", "d"],
+        ["real_time_factor", "real-time factor", "", ".1f"],
+        ["ms_per_scan_median", "per scan, median", "ms", ".1f"],
+        ["ms_per_scan_p95", "per scan, p95", "ms", ".1f"],
+        ["trans_mean_m", "translational error", "m", ".3f"],
+        ["trans_std_m", "its std", "m", ".3f"],
+        ["rot_mean_deg", "rotational error", "deg", ".2f"],
+        ["rot_std_deg", "its std", "deg", ".2f"],
+        ["gmapping_m", "GMapping", "m", ".3f"],
+        ["graph_m", "graph mapping", "m", ".3f"],
+        ["cartographer_m", "Cartographer", "m", ".4f"],
+    ]
+    result = {
+        "figures": {
+            f"{r['log']}_{k}": r[k] for r in rows for k in ("trans_mean_m", "real_time_factor")
+        },
+        "tables": [
+            {
+                "title": "Offline SLAM on the Kümmerle logs, published errors beside",
+                "columns": columns,
+                "rows": rows,
+            }
+        ],
+    }
     if args.json:
-        write_atomic(args.json, json.dumps({"rows": rows}, indent=2) + "\n", "json")
+        write_atomic(args.json, json.dumps(result, indent=1) + "\n", "figures")
 
 
 if __name__ == "__main__":

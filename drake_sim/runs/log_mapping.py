@@ -47,7 +47,7 @@ class LogMappingReport:
     wall_time_s: float
     real_time_factor: float  # log_duration_s / wall_time_s
     loop_closures: int  # loop-closure constraints added (none yet: issue #40's next step)
-    odometry_jumps: int  # odometry steps taken as jumps (no motion predicted)
+    odometry_jumps: int  # large odometry steps the scans showed to be jumps (dropped)
     rejected_matches: int  # scans whose match the gate rejected (the prediction stood)
     map_size_m: float  # side of the square grids the SLAM kept
     map_files: list[str]

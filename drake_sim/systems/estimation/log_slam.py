@@ -3,11 +3,14 @@ fed in file order into ``ScanMatchingSlam``, as slam_toolbox and Cartographer ru
 
 The odometry's motion between scans is the prediction. A log's odometry can be wrong in ways
 the matcher cannot bridge: a scan before the first odometry message has no motion; a step that
-moves more than ``JUMP_DISTANCE`` m or turns more than ``JUMP_ANGLE`` rad between two scans (MIT
-CSAIL's logged odometry jumps 0.95 m and 85 degrees) is counted as a jump and predicts no motion,
-leaving the scan matcher to find the pose. The map's side is the odometry's extent plus twice
-the scans' useful range (``map_side``), at least the config's ``map_size``. Loop closure is not
-here yet (issue #40's second deliverable): the trajectory is the scan matcher's.
+moves more than ``JUMP_DISTANCE`` m or turns more than ``JUMP_ANGLE`` rad between two scans may
+be a glitch (MIT CSAIL's logged odometry jumps 0.95 m and 85 degrees) or a real move (Intel's
+log has gaps with 0.5 to 0.9 m steps), so the scan is matched from both predictions, with the
+step and without it, and the better accepted match decides (``ScanMatchingSlam.update``'s
+``alternative_odom_pose``); a step dropped that way counts as a jump. The map's side is the
+odometry's extent plus twice the scans' useful range (``map_side``), at least the config's
+``map_size``. Loop closure is not here yet (issue #40's second deliverable): the trajectory is
+the scan matcher's.
 """
 
 import dataclasses as dc
@@ -43,7 +46,7 @@ class LogSlamResult:
         times: (n,) s, the processed scans' timestamps as logged.
         poses: (n, 3) the base's pose [x, y, yaw] after each of them (m, m, rad).
         scans: scans processed (all of the log's unless stopped).
-        odometry_jumps: odometry steps taken as jumps (no motion predicted).
+        odometry_jumps: large odometry steps the scans showed to be jumps (dropped).
         stopped: True if ``should_stop`` ended it before the last scan.
     """
 
@@ -99,13 +102,13 @@ def run_log_slam(
             if should_stop is not None and should_stop():
                 stopped = True
                 break
+            alternative = None
             if scan.odometry is not None:
                 if last is not None:
                     step = relative_pose(last, scan.odometry)
                     if math.hypot(step[0], step[1]) > JUMP_DISTANCE or abs(step[2]) > JUMP_ANGLE:
-                        jumps += 1
-                    else:
-                        odom = compose(odom, step)
+                        alternative = odom  # a jump, or a real move: the scan decides
+                    odom = compose(odom, step)
                 last = scan.odometry
             slam.update(
                 scan.ranges,
@@ -114,7 +117,11 @@ def run_log_slam(
                 range_max=scan.range_max,
                 range_min=scan.range_min,
                 time=scan.time,
+                alternative_odom_pose=alternative,
             )
+            if alternative is not None and np.array_equal(slam.odometry, alternative):
+                jumps += 1  # the scan matched better without the step: it was a jump
+                odom = alternative
             times.append(scan.time)
             if progress is not None and (k + 1) % 100 == 0:
                 progress(k + 1, len(log.scans))

@@ -205,6 +205,11 @@ class ScanMatchingSlam:
         return self._pose.copy()
 
     @property
+    def odometry(self) -> np.ndarray | None:
+        """The odometry reading of the last scan (the one kept, see ``update``), None before."""
+        return None if self._odom is None else self._odom.copy()
+
+    @property
     def trajectory(self) -> np.ndarray:
         """(n, 3): the estimate after each scan."""
         return np.array(self._trajectory).reshape(-1, 3)
@@ -228,6 +233,7 @@ class ScanMatchingSlam:
         range_max: float,
         range_min: float = 0.0,
         time: float | None = None,
+        alternative_odom_pose=None,
     ) -> np.ndarray:
         """Processes one scan and returns the new base pose (x, y, yaw) (m, rad).
 
@@ -238,6 +244,11 @@ class ScanMatchingSlam:
                 motion since the previous scan is used).
             range_max, range_min: the sensor's limits, m.
             time: s, recorded beside the pose.
+            alternative_odom_pose: another reading of the odometry for this scan (a log whose
+                odometry may have jumped: the reading without the jump); the scan is matched
+                from both predictions and the better accepted match is kept (the odometry's
+                prediction if neither is accepted), and the odometry goes on from the reading
+                kept.
         """
         ranges = np.asarray(ranges, dtype=float)
         angles = np.asarray(angles, dtype=float)
@@ -253,7 +264,16 @@ class ScanMatchingSlam:
         normals[hit] = surface_normals(sensor_points)
         if self._odom is not None:
             prediction = compose(self._pose, relative_pose(self._odom, odom_pose))
-            self._pose = self._match(sensor_points, normals[hit], prediction)
+            rejected = self.rejected
+            pose, accepted, score = self._scored_match(sensor_points, normals[hit], prediction)
+            if alternative_odom_pose is not None:
+                alternative = np.array(alternative_odom_pose, dtype=float)
+                other = compose(self._pose, relative_pose(self._odom, alternative))
+                second = self._scored_match(sensor_points, normals[hit], other)
+                if second[1] and (not accepted or second[2] > score):
+                    (pose, accepted, score), odom_pose = second, alternative
+                self.rejected = rejected + (0 if accepted else 1)  # one count per scan
+            self._pose = pose
         self._odom = odom_pose
         if self._map_due():
             self._insert(ranges, angles, range_max, range_min, normals)
@@ -268,6 +288,14 @@ class ScanMatchingSlam:
     def save(self, stem: Path | str) -> tuple[Path, Path]:
         """Writes the map as map_server files ``stem.pgm`` and ``stem.yaml``."""
         return save_map(self.map(), stem)
+
+    def _scored_match(self, sensor_points, normals, prediction) -> tuple[np.ndarray, bool, float]:
+        """(``_match``'s pose, whether the match was accepted, its finest map's score)."""
+        rejected = self.rejected
+        pose = self._match(sensor_points, normals, prediction)
+        accepted = self.rejected == rejected
+        score = float(self.last_match.scores[self.map_level]) if accepted else -math.inf
+        return pose, accepted, score
 
     def _match(self, sensor_points, normals, prediction) -> np.ndarray:
         """Matches the end points (n, 2, sensor frame) with their surfaces' normals."""

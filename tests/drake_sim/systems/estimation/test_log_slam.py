@@ -29,6 +29,19 @@ def test_an_odometry_jump_is_bridged_by_the_scan_matcher():
     assert lh.rmse(result.poses, truth) < 0.03
 
 
+def test_a_real_move_across_a_gap_in_the_log_is_kept():
+    truth, odometry, ranges, angles = lh.room_drive()
+    # 16 scans missing on a straight stretch: the odometry steps 0.6 m at once.
+    moves = np.hypot(*(truth[56:, :2] - truth[40:-16, :2]).T)
+    gap = 40 + int(np.argmax(moves > 0.55))
+    keep = np.r_[0 : gap + 1, gap + 16 : len(truth)]
+    assert np.hypot(*(truth[gap + 16, :2] - truth[gap, :2])) > 0.55
+    log = lh.laser_log(truth[keep], odometry[keep], ranges[keep], angles)
+    result = mut.run_log_slam(log, SlamConfig())
+    assert result.odometry_jumps == 0
+    assert lh.rmse(result.poses, truth[keep]) < 0.03
+
+
 def test_scans_before_the_first_odometry_predict_no_motion():
     truth, odometry, ranges, angles = lh.room_drive()
     log = lh.laser_log(truth, odometry, ranges, angles)
