@@ -25,7 +25,8 @@ from drake_sim.base.planar import compose, relative_pose
 from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, SlamConfig
 
 JUMP_DISTANCE = 0.5
-"""m: an odometry step between two scans longer than this is a jump (no motion predicted)."""
+"""m: an odometry step between two scans longer than this may be a jump: the scan is matched
+both with and without it."""
 JUMP_ANGLE = math.radians(45.0)
 """rad: likewise for a turn."""
 USEFUL_RANGE = 30.0
