@@ -159,7 +159,7 @@ SECTIONS = (
         "slam_logs",
         "SLAM on real logs",
         _script("slam_logs"),
-        "Offline SLAM (`python -m drake_sim.mapping --log`) on the classic real 2D laser logs of "
+        "Offline SLAM (the mapping app with `--log FILE`) on the classic real 2D laser logs of "
         "Kümmerle et al. 2009 (Intel, Freiburg 079 and ACES from their ROS 1 bags with "
         "GMapping's beam angles, MIT CSAIL from its CARMEN log), the mapping scenario's SLAM "
         "defaults, no loop closure yet; errors on each log's ground-truth relations, with "
