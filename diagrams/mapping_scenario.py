@@ -15,7 +15,7 @@ from drake_sim.systems.control.route_follower import (
     check_route_follower_config,
 )
 from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig
-from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from drake_sim.systems.estimation.slam_config import SlamConfig
 from drake_sim.systems.sensors.lidar import LidarConfig
 
 

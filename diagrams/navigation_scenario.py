@@ -23,7 +23,7 @@ from drake_sim.systems.estimation.amcl import (
     load_amcl_config,
 )
 from drake_sim.systems.estimation.encoder_odometry import EncoderOdometryConfig
-from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from drake_sim.systems.estimation.slam_config import SlamConfig
 from drake_sim.systems.sensors.lidar import LidarConfig
 from drake_sim.worlds.arena import Arena, BoxSpec, CylinderSpec, ObstacleSpec, check_arena
 

@@ -2,7 +2,9 @@
 ROS 2 bag or a CARMEN log), as slam_toolbox and Cartographer run on a bag; no simulation.
 
 Every scan goes through the scenario's SLAM (``slam`` section, ``--set slam.KEY=VALUE``) in file
-order (``drake_sim.systems.estimation.log_slam``). Written at the end: the map as map_server
+order (``drake_sim.systems.estimation.log_slam``), with its pose graph and loop closures on
+(``slam.loop_closure``; ``--no-loop-closure``: the scan matcher alone), as slam_toolbox and
+Cartographer map a bag. Written at the end: the map as map_server
 files (``--out``, default ``maps/<log name>``), the trajectory in TUM format (``--trajectory``:
 ``timestamp x y z qx qy qz qw``, the base's pose at each processed scan) and the report
 (``--report``). A run stopped by Ctrl-C or SIGTERM writes ``NAME.partial`` files beside them
@@ -27,7 +29,14 @@ from drake_sim.runs.recipe import AppRecipe
 from drake_sim.systems.estimation.log_slam import run_log_slam
 
 DEFAULT_OUT = Path("maps")
-LOG_ONLY = ("trajectory", "scan_topic", "odom_topic", "laser_pose", "scan_angles")
+LOG_ONLY = (
+    "trajectory",
+    "scan_topic",
+    "odom_topic",
+    "laser_pose",
+    "scan_angles",
+    "no_loop_closure",
+)
 """Options that mean something only with ``--log``."""
 SIMULATION_ONLY = ("arena", "world", "start", "route", "teleop", "lidar", "record", "duration")
 """Options of a simulated run that a log's run refuses."""
@@ -46,7 +55,7 @@ class LogMappingReport:
     log_duration_s: float  # from the first processed scan's time to the last's
     wall_time_s: float
     real_time_factor: float  # log_duration_s / wall_time_s
-    loop_closures: int  # loop-closure constraints added (none yet: issue #40's next step)
+    loop_closures: int  # loop-closure constraints added to the pose graph
     odometry_jumps: int  # large odometry steps the scans showed to be jumps (dropped)
     rejected_matches: int  # scans whose match the gate rejected (the prediction stood)
     map_size_m: float  # side of the square grids the SLAM kept
@@ -78,6 +87,13 @@ def add_flags(p: argparse.ArgumentParser) -> None:
         type=float,
         metavar=("X", "Y", "YAW"),
         help="with --log: the sensor on the base, x, y (m), yaw (deg) (default: the log's tf)",
+    )
+    group.add_argument(
+        "--no-loop-closure",
+        action="store_true",
+        default=None,
+        help="with --log: the scan matcher alone (default: with the pose graph and loop "
+        "closures, slam.loop_closure)",
     )
     group.add_argument(
         "--scan-angles",
@@ -118,9 +134,11 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
         laser = np.array([x, y, math.radians(yaw)])
     if not args.headless:
         print("--log runs without the viewer (the map and trajectory are written)", flush=True)
+    config = inputs.scenario.slam
+    loops = dc.replace(config.loop_closure, enabled=not args.no_loop_closure)
     start = time.perf_counter()
     result = run_log_slam(
-        log, inputs.scenario.slam, laser_pose=laser, should_stop=cli.stop_received
+        log, dc.replace(config, loop_closure=loops), laser_pose=laser, should_stop=cli.stop_received
     )
     wall = time.perf_counter() - start
     end = "stopped" if result.stopped else "done"
@@ -146,7 +164,7 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
         log_duration_s=span,
         wall_time_s=wall,
         real_time_factor=span / wall if wall > 0 else math.inf,
-        loop_closures=0,
+        loop_closures=result.loop_closures,
         odometry_jumps=result.odometry_jumps,
         rejected_matches=result.slam.rejected,
         map_size_m=result.slam.config.map_size,
@@ -156,7 +174,8 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
     print(
         f"{end}: {report.scans} of {len(log.scans)} scans ({span:.1f} s of log) in {wall:.1f} s "
         f"({report.real_time_factor:.2f}x real time), {report.odometry_jumps} odometry jumps, "
-        f"{report.rejected_matches} matches rejected; map {files[1] if files else 'none'}",
+        f"{report.rejected_matches} matches rejected, {report.loop_closures} loop closures; "
+        f"map {files[1] if files else 'none'}",
         flush=True,
     )
     if args.report:

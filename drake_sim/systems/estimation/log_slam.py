@@ -9,8 +9,9 @@ log has gaps with 0.5 to 0.9 m steps), so the scan is matched from both predicti
 step and without it, and the better accepted match decides (``ScanMatchingSlam.update``'s
 ``alternative_odom_pose``); a step dropped that way counts as a jump. The map's side is the
 odometry's extent plus twice the scans' useful range (``map_side``), at least the config's
-``map_size``. Loop closure is not here yet (issue #40's second deliverable): the trajectory is
-the scan matcher's.
+``map_size``. With ``config.loop_closure.enabled`` the SLAM is ``graph_slam.GraphSlam`` (a pose
+graph with loop closures; the map drawn again from the final graph at the end); without, the
+trajectory is the scan matcher's.
 """
 
 import dataclasses as dc
@@ -22,7 +23,9 @@ import numpy as np
 from drake_sim.base import cli
 from drake_sim.base.laser_scans import LaserLog
 from drake_sim.base.planar import compose, relative_pose
-from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, SlamConfig
+from drake_sim.systems.estimation.graph_slam import GraphSlam, make_slam
+from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam
+from drake_sim.systems.estimation.slam_config import SlamConfig
 
 JUMP_DISTANCE = 0.5
 """m: an odometry step between two scans longer than this may be a jump: the scan is matched
@@ -48,14 +51,16 @@ class LogSlamResult:
         poses: (n, 3) the base's pose [x, y, yaw] after each of them (m, m, rad).
         scans: scans processed (all of the log's unless stopped).
         odometry_jumps: large odometry steps the scans showed to be jumps (dropped).
+        loop_closures: loop closures added to the pose graph (0 with loop closure off).
         stopped: True if ``should_stop`` ended it before the last scan.
     """
 
-    slam: ScanMatchingSlam
+    slam: ScanMatchingSlam | GraphSlam
     times: np.ndarray
     poses: np.ndarray
     scans: int
     odometry_jumps: int
+    loop_closures: int
     stopped: bool
 
 
@@ -92,7 +97,7 @@ def run_log_slam(
     config = dc.replace(config, map_size=map_side(log, config))
     sensor = log.laser_pose if laser_pose is None else np.asarray(laser_pose, dtype=float)
     first = next((s.odometry for s in log.scans if s.odometry is not None), np.zeros(3))
-    slam = ScanMatchingSlam(config, initial_pose=first, X_base_sensor=sensor)
+    slam = make_slam(config, initial_pose=first, X_base_sensor=sensor)
     odom = np.array(first, dtype=float)  # the odometry as the SLAM is fed it (jumps removed)
     last = None  # the log's odometry at the previous scan
     jumps = 0
@@ -130,6 +135,10 @@ def run_log_slam(
         if not cli.is_stop(e):
             raise
         stopped = True
+    if isinstance(slam, GraphSlam) and not stopped:
+        slam.finish()
     n = min(len(times), slam.scans)  # a stop between the update and its time: drop that scan
     poses = slam.trajectory[:n]
-    return LogSlamResult(slam, np.array(times[:n], dtype=float), poses, n, jumps, stopped)
+    closures = slam.loop_closures if isinstance(slam, GraphSlam) else 0
+    times = np.array(times[:n], dtype=float)
+    return LogSlamResult(slam, times, poses, n, jumps, closures, stopped)

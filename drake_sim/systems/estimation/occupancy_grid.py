@@ -111,6 +111,7 @@ class LogOddsGrid:
         *,
         range_min: float = 0.0,
         max_free_range: float | None = None,
+        no_return_range: float | None = None,
         mask=None,
         hit_directions=None,
     ) -> None:
@@ -123,6 +124,8 @@ class LogOddsGrid:
             range_min: m; shorter (finite) returns are ignored.
             max_free_range: m; beams clear space up to this distance at most (default
                 ``range_max``).
+            no_return_range: m; a beam with no return clears space this far at most (default:
+                as far as the others).
             mask: optional (n,) booleans, False beams are ignored.
             hit_directions: optional (n, 2) unit vectors in the sensor frame along which each
                 hit is put ``hit_offset`` cells beyond its end point (default: the beams; a
@@ -139,7 +142,8 @@ class LogOddsGrid:
         hit = ranges < range_max
         free_limit = range_max if max_free_range is None else min(max_free_range, range_max)
         # Free space stops half a cell short of a hit, so the hit cell itself is not cleared.
-        free_length = np.where(hit, ranges - 0.5 * self.resolution, free_limit)
+        missing = free_limit if no_return_range is None else min(free_limit, no_return_range)
+        free_length = np.where(hit, ranges - 0.5 * self.resolution, missing)
         free_length = np.minimum(free_length, free_limit)
         x, y, yaw = (float(v) for v in sensor_pose)
         c, s = np.cos(angles + yaw), np.sin(angles + yaw)
@@ -179,6 +183,13 @@ class LogOddsGrid:
                 )
             )
         self._grow_box(np.concatenate([free_cells, hit_cells]))
+        self.version += 1
+
+    def clear(self) -> None:
+        """Forgets every scan: all cells unknown again (the changes too)."""
+        self.log_odds[:] = 0.0
+        self.known_box = self.changed_box = None
+        self._changes = []
         self.version += 1
 
     def to_occupancy_map(

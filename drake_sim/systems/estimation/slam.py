@@ -1,4 +1,5 @@
-"""The SLAM node: scan-matching SLAM (``ScanMatchingSlam``) as a Drake system.
+"""The SLAM node: scan-matching SLAM (``ScanMatchingSlam``, or ``GraphSlam`` with loop closure on)
+as a Drake system.
 
 Like hector_mapping it takes each laser scan and the wheel odometry, matches the scan against the
 map built so far, and grows the map. Its ``pose`` output is what ROS gets by chaining the
@@ -14,7 +15,9 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_sim.base.map_files import OccupancyMap
 from drake_sim.base.planar import compose, relative_pose
-from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam, SlamConfig
+from drake_sim.systems.estimation.graph_slam import GraphSlam, make_slam
+from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam
+from drake_sim.systems.estimation.slam_config import SlamConfig
 from drake_sim.systems.sensors.lidar import LaserScan
 
 SCAN_DELAY = 1e-4
@@ -34,7 +37,7 @@ EMPTY_MAP = OccupancyMap(cells=np.full((0, 0), -1, dtype=np.int8), resolution=1.
 class _SlamState:
     """What the SLAM system keeps between scans (its abstract state)."""
 
-    def __init__(self, slam: ScanMatchingSlam, odometry):
+    def __init__(self, slam: ScanMatchingSlam | GraphSlam, odometry):
         self.slam = slam
         self.last_scan_time = -np.inf
         self.odometry_at_scan = np.asarray(odometry, dtype=float)  # [x, y, yaw]
@@ -106,13 +109,13 @@ class SlamSystem(LeafSystem):
         )
 
     def _new_state(self, odometry) -> _SlamState:
-        slam = ScanMatchingSlam(self._config, self._initial_pose, X_base_sensor=self._X_base_sensor)
+        slam = make_slam(self._config, self._initial_pose, X_base_sensor=self._X_base_sensor)
         return _SlamState(slam, self._initial_pose if odometry is None else odometry)
 
     def _get(self, context) -> _SlamState:
         return context.get_abstract_state(self._state).get_value()
 
-    def slam(self, context) -> ScanMatchingSlam:
+    def slam(self, context) -> ScanMatchingSlam | GraphSlam:
         """The SLAM (its map, pose and trajectory) in ``context``; read only."""
         return self._get(context).slam
 

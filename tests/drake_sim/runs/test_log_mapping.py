@@ -78,6 +78,7 @@ def test_a_stopped_run_writes_partial_files_and_keeps_complete_ones(
     ("args", "needle"),
     [
         (["--trajectory", "t.txt"], "--trajectory goes with --log FILE"),
+        (["--no-loop-closure"], "--no-loop-closure goes with --log FILE"),
         (["--log", "LOG", "--start", "0", "0", "0"], "--start is for a simulated run"),
         (["--log", "LOG", "--laser-pose", "0", "nan", "0"], "--laser-pose must be finite"),
         (["--log", "LOG", "--scan-topic", "/scan"], "--odom-topic go with a bag"),

@@ -6,8 +6,9 @@ import dataclasses as dc
 import numpy as np
 
 from drake_sim.systems.estimation import log_slam as mut
-from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from drake_sim.systems.estimation.slam_config import SlamConfig
 from tests import log_helpers as lh
+from tests import slam_helpers as sh
 
 
 def test_the_trajectory_follows_the_truth_where_the_odometry_drifts():
@@ -27,6 +28,23 @@ def test_an_odometry_jump_is_bridged_by_the_scan_matcher():
     result = mut.run_log_slam(lh.laser_log(truth, jumped, ranges, angles), SlamConfig())
     assert result.odometry_jumps == 1
     assert lh.rmse(result.poses, truth) < 0.03
+
+
+def test_loop_closure_brings_back_a_pose_the_matcher_lost():
+    """The whole room route with the odometry stepping 0.5 m sideways at once, within the
+    jump rule's 0.5 m (so matched from the step only) and beyond the matcher's 0.3 m gate:
+    the matcher alone stays off; with loop closure the end is found again."""
+    truth, odometry, ranges, angles = lh.room_drive(sh.ROOM_ROUTE)
+    odometry[400:, 1] += 0.45
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    plain = mut.run_log_slam(log, SlamConfig())
+    loops = dc.replace(SlamConfig().loop_closure, enabled=True)
+    closed = mut.run_log_slam(log, dc.replace(SlamConfig(), loop_closure=loops))
+    assert plain.loop_closures == 0 and closed.loop_closures >= 1
+    end = slice(-50, None)
+    assert lh.rmse(plain.poses[end], truth[end]) > 0.3
+    assert lh.rmse(closed.poses[end], truth[end]) < 0.03
+    assert lh.rmse(closed.poses, truth) < 0.5 * lh.rmse(plain.poses, truth)
 
 
 def test_a_real_move_across_a_gap_in_the_log_is_kept():

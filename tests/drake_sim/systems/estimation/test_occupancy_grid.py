@@ -244,3 +244,18 @@ def test_tracked_changes_list_the_cells_that_became_occupied_free_or_seen():
     np.testing.assert_array_equal(np.unique(stopped), np.nonzero((flat > 0) & (after <= 0))[0])
     np.testing.assert_array_equal(np.unique(seen), np.nonzero((flat == 0) & (after != 0))[0])
     assert stopped.size == 1 and all(part.size == 0 for part in grid.take_changes())
+
+
+def test_clear_forgets_every_scan_and_the_same_scans_draw_the_same_grid_again():
+    grid = make_grid()
+    grid.track_changes = True
+    scans = [((0.0, 0.0, 0.0), [2.0, 1.0]), ((1.0, 0.5, 0.3), [1.5, np.inf])]
+    for pose, ranges in scans:
+        grid.insert_scan(pose, ranges, [0.0, 1.0], 3.5)
+    drawn, version = grid.log_odds.copy(), grid.version
+    grid.clear()
+    assert not grid.log_odds.any() and grid.known_box is None and grid.version == version + 1
+    assert grid.take_changed_box() is None and all(p.size == 0 for p in grid.take_changes())
+    for pose, ranges in scans:
+        grid.insert_scan(pose, ranges, [0.0, 1.0], 3.5)
+    np.testing.assert_array_equal(grid.log_odds, drawn)

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 import drake_sim.systems.estimation.scan_matching_slam as mut
-from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import load_map
 from drake_sim.base.planar import compose, wrap_angle
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
@@ -169,40 +168,6 @@ def test_map_update_thresholds():
     assert dut.map_updates == 1
 
 
-def test_defaults_and_config_file(tmp_path):
-    config = mut.SlamConfig()
-    config.check()
-    assert (config.resolution, config.levels, config.map_size) == (0.05, 3, 30.0)
-    path = tmp_path / "slam.yaml"
-    path.write_text("map_update_distance: 0.3\niterations: [5, 4, 3, 2]\n")
-    loaded = mut.load_slam_config(path)
-    assert loaded.map_update_distance == 0.3 and loaded.iterations == [5, 4, 3, 2]
-    assert loaded.p_hit == config.p_hit
-
-
-@pytest.mark.parametrize(
-    "text, match",
-    [
-        ("resolution: -0.05", "'resolution' must be positive"),
-        ("resolution: .nan", "'resolution' must be finite"),
-        ("p_hit: 0.4", "'p_hit' must be in"),
-        ("p_miss: 0.7", "'p_miss' must be in"),
-        ("levels: 3\niterations: [4, 4]", "'iterations' needs 4 counts"),
-        ("levels: 0", "'levels' must be at least 1"),
-        ("prior_weight: [1.0, 2.0]", "'prior_weight' needs 3"),
-        ("map_update_angle_deg: -1", "'map_update_angle_deg' must not be negative"),
-        ("hit_offset: 1.0", "'hit_offset' must be in"),
-        ("resolutoin: 0.05", "unknown key 'resolutoin'"),
-    ],
-)
-def test_bad_config_is_one_line_naming_the_key(tmp_path, text, match):
-    path = tmp_path / "slam.yaml"
-    path.write_text(text + "\n")
-    with pytest.raises(ConfigError, match=match) as info:
-        mut.load_slam_config(path)
-    assert str(path) in str(info.value) and "\n" not in str(info.value)
-
-
 def test_copies_are_independent():
     import copy
 
@@ -216,3 +181,28 @@ def test_copies_are_independent():
     assert twin.scans == 2 and dut.scans == 1
     assert not np.array_equal(twin.grids[0].log_odds, dut.grids[0].log_odds)
     np.testing.assert_allclose(twin.pose, (0.5, 0.0, 0.0), atol=0.03)
+
+
+def test_redraw_draws_the_map_from_the_scans_at_the_poses_given(room_run):
+    """The scans the map took, drawn again at their own poses: the same map; at poses moved
+    10 cm: the map moves with them; the estimate becomes the pose given."""
+    dut, truth, odom = room_run
+    config = dc.replace(mut.SlamConfig(), initial_map_updates=1)
+    slam = mut.ScanMatchingSlam(config, truth[0], X_BASE_SENSOR)
+    world = helpers.room()
+    sensor = np.array([helpers.compose(p, X_BASE_SENSOR) for p in truth[:200:20]])
+    ranges, angles = helpers.lidar_scans(world, sensor, seed=1)
+    kept = []
+    for pose, scan in zip(truth[:200:20], ranges, strict=True):
+        slam._pose = pose.copy()  # the pose the scan is drawn at
+        slam._insert(scan, angles, 3.5, 0.12, np.stack([np.cos(angles), np.sin(angles)], -1))
+        kept.append((pose.copy(), *slam.last_insert))
+    drawn = slam.map(crop=False).cells.copy()
+    updates = slam.map_updates
+    slam.redraw(kept, truth[5])
+    np.testing.assert_array_equal(slam.map(crop=False).cells, drawn)
+    np.testing.assert_array_equal(slam.pose, truth[5])
+    assert slam.map_updates == updates  # a redraw is not a map update
+    shifted = [(compose(pose, [0.1, 0.0, 0.0]), *rest) for pose, *rest in kept]
+    slam.redraw(shifted, truth[5])
+    assert (slam.map(crop=False).cells != drawn).any()

@@ -7,7 +7,7 @@ from pydrake.systems.framework import DiagramBuilder, LeafSystem
 import drake_sim.systems.estimation.slam as mut
 from drake_sim.base import planar
 from drake_sim.base.resources import config_dir
-from drake_sim.systems.estimation.scan_matching_slam import SlamConfig
+from drake_sim.systems.estimation.slam_config import SlamConfig
 from drake_sim.systems.sensors.lidar import LaserScan
 from drake_sim.worlds.arena import arena_footprints, load_arena
 from drake_sim.worlds.footprints import cast_rays
@@ -58,12 +58,17 @@ class ScriptedSensors(LeafSystem):
 
 @pytest.fixture(scope="module")
 def finished():
+    return run_system(SlamConfig())
+
+
+def run_system(config: SlamConfig):
+    """The SLAM system on the scripted drive for 10.1 s: (system, its context)."""
     arena = load_arena(config_dir() / "arenas" / "room.yaml")
     builder = DiagramBuilder()
     sensors = builder.AddSystem(ScriptedSensors(arena_footprints(arena, height=0.17)))
     dut = builder.AddSystem(
         mut.SlamSystem(
-            config=SlamConfig(),
+            config=config,
             period=1.0 / RATE,
             initial_pose=true_pose(0.0),
             X_base_sensor=SENSOR,
@@ -120,3 +125,22 @@ def test_the_map_output_holds_the_walls(finished):
     assert south.sum() > 40
     assert np.abs(ys[south] + 2.5).max() < 0.1
     assert dut.slam(context).scans == 51
+
+
+def test_with_loop_closure_on_the_system_runs_the_pose_graph():
+    """``slam.loop_closure.enabled``: the same system keeps a ``GraphSlam`` (copied with Drake's
+    state at every scan) and tracks as well; 2 m of drive closes no loop."""
+    import dataclasses as dc
+
+    from drake_sim.systems.estimation.graph_slam import GraphSlam
+
+    config = SlamConfig()
+    config = dc.replace(config, loop_closure=dc.replace(config.loop_closure, enabled=True))
+    dut, context = run_system(config)
+    slam = dut.slam(context)
+    assert isinstance(slam, GraphSlam) and slam.scans == 51 and slam.loop_closures == 0
+    assert len(slam.graph) == slam.map_updates >= 5
+    history = dut.history(context)
+    truth = np.array([true_pose(t) for t in history[:, 0]])
+    assert np.hypot(*(history[:, 1:3] - truth[:, :2]).T).max() < 0.03
+    assert dut.GetOutputPort("map").Eval(context).occupied().sum() > 100
