@@ -15,6 +15,7 @@ the map agree with the final graph.
 With loop closure off, ``make_slam`` gives the plain ``ScanMatchingSlam``.
 """
 
+import copy
 import math
 
 import numpy as np
@@ -64,8 +65,6 @@ class GraphSlam:
 
     def __deepcopy__(self, memo):
         """A copy for Drake's state: the keyframes' arrays are never changed, so shared."""
-        import copy
-
         other = GraphSlam.__new__(GraphSlam)
         other.__dict__.update(self.__dict__)
         other.local = copy.deepcopy(self.local, memo)

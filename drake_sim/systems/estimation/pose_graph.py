@@ -12,9 +12,9 @@ analytic: each edge touches six variables; scipy's sparse direct solver), with i
 reweighted residuals for the robust loss ``rho`` (Cauchy's by default; Huber's discounts gross
 errors less): an edge whose error is many sigmas off (a wrong loop closure, a scan matched into
 the wrong corridor) then pulls with a bounded force instead of bending the whole graph, as
-g2o's and GTSAM's robust kernels do. ``scipy.optimize.least_squares`` was tried first: its
-sparse trust region (LSMR steps) had moved a 3,000-node loop only 1 % of the way after 500
-evaluations, where the direct solve converges in a few steps.
+g2o's and GTSAM's robust kernels do. ``scipy.optimize.least_squares`` was tried first: on a
+3,000-node chain with 280 closures its sparse trust region (LSMR steps) was still at 12 times
+the optimal cost after 500 evaluations (1.9 s); the direct solve reaches it in 0.1 s.
 """
 
 import dataclasses as dc
