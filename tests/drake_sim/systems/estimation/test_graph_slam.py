@@ -5,7 +5,6 @@ closure off nothing changes."""
 
 import dataclasses as dc
 import functools
-import math
 
 import numpy as np
 import pytest
@@ -104,4 +103,3 @@ def test_bad_loop_closure_settings_are_refused():
         config = dc.replace(SlamConfig(), loop_closure=LoopClosureConfig(**{key: value}))
         with pytest.raises(ConfigError, match=words):
             mut.make_slam(config)
-    assert math.isfinite(LoopClosureConfig().min_travel)
