@@ -69,9 +69,8 @@ def run_one(
     log = read_log(data / file, angles=angles)
     scans = log.scans[:limit] if limit is not None else log.scans
     if centimetres or noise_seed is not None:
-        rng = np.random.default_rng(noise_seed)
-        scans = [dc.replace(s, ranges=_perturbed(s.ranges, rng, noise_seed, centimetres))
-                 for s in scans]  # fmt: skip
+        rng = None if noise_seed is None else np.random.default_rng(noise_seed)
+        scans = [dc.replace(s, ranges=_perturbed(s.ranges, rng, centimetres)) for s in scans]
     log = dc.replace(log, scans=scans)
     costs = []
     last = [time.perf_counter()]
@@ -104,13 +103,14 @@ def run_one(
     }
 
 
-def _perturbed(ranges, rng, noise_seed, centimetres) -> np.ndarray:
-    """The ranges rounded to 1 cm and/or with 1 mm of noise (no-return readings kept)."""
+def _perturbed(ranges, rng, centimetres) -> np.ndarray:
+    """The ranges rounded to 1 cm and/or with 1 mm of noise from ``rng`` (None: none); no-return
+    readings kept."""
     finite = np.isfinite(ranges)
     out = np.array(ranges, dtype=float)
     if centimetres:
         out[finite] = np.round(out[finite], 2)
-    if noise_seed is not None:
+    if rng is not None:
         out[finite] += rng.normal(0.0, NOISE, finite.sum())
     return out
 

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from drake_sim.base.map_files import OccupancyMap, save_map
+from drake_sim.base.map_files import OccupancyMap
 from drake_sim.base.planar import compose, relative_pose
 from drake_sim.systems.estimation.loop_closure import candidate, close_loop, scan_points
 from drake_sim.systems.estimation.pose_graph import PoseGraph
@@ -28,12 +28,13 @@ from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam
 from drake_sim.systems.estimation.slam_config import SlamConfig
 
 
-def make_slam(config: SlamConfig | None = None, initial_pose=(0.0, 0.0, 0.0), X_base_sensor=None):
+def make_slam(
+    config: SlamConfig | None = None, initial_pose=(0.0, 0.0, 0.0), X_base_sensor=(0.0, 0.0, 0.0)
+):
     """A ``GraphSlam`` when ``config.loop_closure.enabled``, else a ``ScanMatchingSlam``."""
     config = config if config is not None else SlamConfig()
-    sensor = (0.0, 0.0, 0.0) if X_base_sensor is None else X_base_sensor
     kind = GraphSlam if config.loop_closure.enabled else ScanMatchingSlam
-    return kind(config, initial_pose, X_base_sensor=sensor)
+    return kind(config, initial_pose, X_base_sensor=X_base_sensor)
 
 
 class GraphSlam:
@@ -47,10 +48,12 @@ class GraphSlam:
     """
 
     def __init__(
-        self, config: SlamConfig | None = None, initial_pose=(0.0, 0.0, 0.0), X_base_sensor=None
+        self,
+        config: SlamConfig | None = None,
+        initial_pose=(0.0, 0.0, 0.0),
+        X_base_sensor=(0.0, 0.0, 0.0),
     ):
-        sensor = (0.0, 0.0, 0.0) if X_base_sensor is None else X_base_sensor
-        self.local = ScanMatchingSlam(config, initial_pose, X_base_sensor=sensor)
+        self.local = ScanMatchingSlam(config, initial_pose, X_base_sensor=X_base_sensor)
         self.config = self.local.config
         self.graph = PoseGraph()
         self._inserted: list[tuple] = []  # per keyframe: its scan as the map took it
@@ -64,11 +67,12 @@ class GraphSlam:
         self.redraws = 0
 
     def __deepcopy__(self, memo):
-        """A copy for Drake's state: the keyframes' arrays are never changed, so shared."""
+        """A copy for Drake's state (at every scan): the keyframes' arrays and the graph's
+        nodes and edges are never changed in place, so shared; the lists are copied."""
         other = GraphSlam.__new__(GraphSlam)
         other.__dict__.update(self.__dict__)
         other.local = copy.deepcopy(self.local, memo)
-        other.graph = copy.deepcopy(self.graph, memo)
+        other.graph = self.graph.copy()
         for key in ("_inserted", "_points", "_travel", "_segments", "_attached"):
             setattr(other, key, list(getattr(self, key)))
         return other
@@ -132,7 +136,7 @@ class GraphSlam:
         return self.local.map(crop=crop)
 
     def save(self, stem):
-        return save_map(self.map(), stem)
+        return self.local.save(stem)
 
     def _keyframe(self, pose) -> np.ndarray:
         loops = self.config.loop_closure
@@ -144,7 +148,7 @@ class GraphSlam:
             self._segments.append(0)
         else:
             step = relative_pose(self._reference, pose)
-            self.graph.add_node(compose(self.graph.poses[node - 1], step))
+            self.graph.add_node(compose(self.graph.pose(node - 1), step))
             matched = self.local.rejected == self._rejected
             sigma = loops.sequence_sigma if matched else loops.unmatched_sigma
             sigma = np.array(sigma) * [1.0, 1.0, math.pi / 180.0]
@@ -156,7 +160,7 @@ class GraphSlam:
         self._reference = np.array(pose, dtype=float)
         self._rejected = self.local.rejected
         if node % loops.attempt_every == 0 and self._try_closure(node):
-            moved = relative_pose(pose, self.graph.poses[node])
+            moved = relative_pose(pose, self.graph.pose(node))
             if math.hypot(moved[0], moved[1]) > loops.redraw_distance or abs(
                 moved[2]
             ) > math.radians(loops.redraw_angle_deg):

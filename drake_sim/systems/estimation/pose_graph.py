@@ -65,9 +65,17 @@ class PoseGraph:
         self._poses.append(pose)
         return len(self._poses) - 1
 
-    def set_pose(self, i: int, pose) -> None:
-        """Moves node ``i`` (a new initial guess)."""
-        self._poses[i] = np.array(pose, dtype=float)
+    def pose(self, i: int) -> np.ndarray:
+        """Node ``i``'s current pose (a copy)."""
+        return self._poses[i].copy()
+
+    def copy(self) -> "PoseGraph":
+        """An independent copy in O(nodes) list work: a node's array and an edge are never
+        changed in place (``optimize`` puts new arrays in), so both copies share them."""
+        other = PoseGraph()
+        other._poses = list(self._poses)
+        other.edges = list(self.edges)
+        return other
 
     def add_edge(self, i: int, j: int, measurement, sigma) -> None:
         """Adds the measurement of node ``j`` in node ``i``'s frame (see ``Edge``)."""

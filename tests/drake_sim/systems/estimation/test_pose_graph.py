@@ -113,3 +113,19 @@ def test_bad_nodes_and_edges_are_refused():
     with pytest.raises(ValueError, match="loss"):
         graph.optimize(loss="tukey")
     assert graph.optimize() == 0.0  # no edges: nothing to do
+
+
+def test_a_copy_is_independent_of_the_graph_it_came_from():
+    """As Drake's state is copied at every scan: optimising or growing the copy leaves the
+    original's nodes and edges as they were."""
+    truth, estimate, steps = square_loop()
+    graph = graph_of(estimate, steps)
+    last = len(truth) - 1
+    twin = graph.copy()
+    twin.add_edge(0, last, relative_pose(truth[0], truth[last]), SIGMA)
+    twin.optimize()
+    twin.add_node([9.0, 9.0, 0.0])
+    assert len(graph) == len(estimate) and len(graph.edges) == len(steps)
+    np.testing.assert_array_equal(graph.poses, estimate)
+    np.testing.assert_array_equal(graph.pose(last), estimate[last])
+    assert np.hypot(*twin.pose(last)[:2]) < 0.02
