@@ -16,6 +16,8 @@ from pydrake.systems.primitives import MatrixGain
 
 from drake_sim.base.checks import fields_of, require_positive
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.map_files import OccupancyMap
+from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.robots.turtlebot3 import (
     add_turtlebot3,
     drive_limits,
@@ -31,6 +33,7 @@ from drake_sim.systems.estimation.encoder_odometry import (
     PlanarGroundTruth,
     check_config,
 )
+from drake_sim.systems.recording.ros_log import RosLogFrames, RosLogRecorder
 from drake_sim.systems.sensors.lidar import add_lidar, check_lidar_config
 from drake_sim.worlds.arena import Arena
 from drake_sim.worlds.arena_world import add_arena
@@ -51,6 +54,7 @@ class LidarRobotParts:
     odometry_twist: OutputPort  # [v, omega] from the wheel encoders.
     scan: OutputPort  # LaserScan.
     X_base_sensor: tuple[float, float, float]  # The lidar's planar pose on the base.
+    frames: RosLogFrames  # The robot's base and lidar frame names, for a ROS log.
 
 
 def check_lidar_robot_scenario(scenario, where: str) -> None:
@@ -134,4 +138,41 @@ def add_lidar_robot(
         odometry_twist=encoder_odometry.GetOutputPort("twist"),
         scan=sensor.GetOutputPort("scan"),
         X_base_sensor=(robot.lidar.x, robot.lidar.y, 0.0),
+        frames=RosLogFrames(base=names["base"], laser=names["lidar"]),
     )
+
+
+def add_ros_log(
+    builder: DiagramBuilder,
+    writer: McapLogWriter,
+    scenario,
+    robot: Turtlebot3Params,
+    parts: LidarRobotParts,
+    *,
+    estimate: OutputPort | None = None,
+    map_port: OutputPort | None = None,
+    static_map: OccupancyMap | None = None,
+) -> RosLogRecorder:
+    """Adds a ``RosLogRecorder`` (named ``ros_log``) writing the robot's scans, odometry, true
+    pose, ``estimate`` (SLAM's or AMCL's pose in the map) and map (``map_port``'s maps, or the
+    fixed ``static_map``) to ``writer``."""
+    recorder = builder.AddNamedSystem(
+        "ros_log",
+        RosLogRecorder(
+            writer=writer,
+            scan_period=1.0 / scenario.lidar.rate,
+            frames=parts.frames,
+            X_base_sensor=parts.X_base_sensor,
+            sensor_height=robot.scan_height,
+            static_map=static_map,
+        ),
+    )
+    builder.Connect(parts.scan, recorder.GetInputPort("scan"))
+    builder.Connect(parts.odometry_pose, recorder.GetInputPort("odometry_pose"))
+    builder.Connect(parts.odometry_twist, recorder.GetInputPort("odometry_twist"))
+    builder.Connect(parts.true_pose, recorder.GetInputPort("true_pose"))
+    if estimate is not None:
+        builder.Connect(estimate, recorder.GetInputPort("estimated_pose"))
+    if map_port is not None and static_map is None:
+        builder.Connect(map_port, recorder.GetInputPort("map"))
+    return recorder

@@ -10,8 +10,9 @@ from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput
 
-from diagrams.lidar_robot import add_lidar_robot
+from diagrams.lidar_robot import add_lidar_robot, add_ros_log
 from diagrams.mapping_scenario import MappingScenario
+from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.control.route_follower import RouteFollower
 from drake_sim.systems.estimation.slam import SCAN_DELAY, SlamSystem
@@ -30,14 +31,17 @@ def make_mapping_diagram(
     meshcat: Meshcat | None = None,
     teleop: bool = False,
     keyframes: bool = False,
+    log_writer: McapLogWriter | None = None,
 ) -> Diagram:
     """Builds the mapping diagram for ``scenario`` in ``arena``.
 
     The ``RouteFollower`` (named ``route_follower``) drives ``waypoints`` ([[x, y], ...] m)
     from the arena's start using the true pose; with ``teleop`` the ``MeshcatTeleop``'s keys
     drive instead (needs ``meshcat``). With ``keyframes`` a Meshcat recording keeps the map
-    and the scan as they grow (see ``MapView``). The SLAM (``slam``, a ``SlamSystem``) starts at the
-    arena's start pose, so its map frame is the arena's.
+    and the scan as they grow (see ``MapView``). With a ``log_writer`` the run is written
+    to it as a ROS 2 log (``add_ros_log``: scans, odometry, tf, the SLAM's map). The SLAM
+    (``slam``, a ``SlamSystem``) starts at the arena's start pose, so its map frame is the
+    arena's.
 
     Exported outputs: ``true_pose``, ``odometry_pose``, ``slam_pose`` (``[x, y, yaw]``),
     ``scan`` (``LaserScan``), ``map`` (``OccupancyMap``), ``command`` (``cmd_vel``) and, with a
@@ -80,6 +84,11 @@ def make_mapping_diagram(
         ("command", driver.GetOutputPort("command")),
     ):
         builder.ExportOutput(port, name)
+    if log_writer is not None:
+        add_ros_log(
+            builder, log_writer, scenario, robot, robot_parts,
+            estimate=slam.GetOutputPort("pose"), map_port=slam.GetOutputPort("map"),
+        )  # fmt: skip
     logger = LogVectorOutput(robot_parts.true_pose, builder, scenario.log_period)
     logger.set_name("log_true_pose")
     if meshcat is not None:

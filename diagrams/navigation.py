@@ -26,9 +26,10 @@ from pydrake.systems.primitives import (
     LogVectorOutput,
 )
 
-from diagrams.lidar_robot import add_lidar_robot
+from diagrams.lidar_robot import add_lidar_robot, add_ros_log
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base.map_files import UNKNOWN, OccupancyMap
+from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.navigation.navigator import Navigator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.estimation.amcl import Amcl
@@ -63,6 +64,7 @@ def make_navigation_diagram(
     global_localization: bool = False,
     goals=(),
     meshcat: Meshcat | None = None,
+    log_writer: McapLogWriter | None = None,
 ) -> Diagram:
     """Builds the navigation diagram.
 
@@ -76,6 +78,8 @@ def make_navigation_diagram(
             covariance (None: the AMCL config's ``initial_pose_*`` and ``initial_cov_*``).
         global_localization: start AMCL with particles over the map's free space instead.
         goals: ``[x, y, yaw]`` goals (m, m, rad) the navigator visits in order.
+        log_writer: where to write the run as a ROS 2 log (``add_ros_log``: scans, odometry,
+            tf with the estimate, the saved map, or the live SLAM's without one), or None.
 
     Exported outputs: ``true_pose``, ``odometry_pose``, ``estimated_pose`` (AMCL's, or the
     odometry's with no map),
@@ -127,6 +131,13 @@ def make_navigation_diagram(
         ("navigation_status", navigator.GetOutputPort("status")),
     ):
         builder.ExportOutput(port, name)
+    if log_writer is not None:
+        slam = builder.GetSubsystemByName("slam") if builder.HasSubsystemNamed("slam") else None
+        add_ros_log(
+            builder, log_writer, scenario, robot, robot_parts, estimate=estimate,
+            map_port=slam.GetOutputPort("map") if slam is not None else None,
+            static_map=occupancy_map,
+        )  # fmt: skip
     for name, port in (
         ("log_true_pose", robot_parts.true_pose),
         ("log_estimated_pose", estimate),

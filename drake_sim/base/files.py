@@ -59,9 +59,8 @@ def write_atomic_many(items, what: str = "file") -> list[Path]:
                 f.write(payload)
                 f.flush()
                 os.fsync(f.fileno())
-            mode = path.stat().st_mode & 0o7777 if path.exists() else 0o666 & ~_UMASK
-            os.chmod(tmp_name, mode)  # as an in-place write would leave it
-        with _signals_held():
+            os.chmod(tmp_name, file_mode(path))
+        with signals_held():
             while staged:
                 tmp_name, current = staged[0]
                 os.replace(tmp_name, current)
@@ -75,8 +74,14 @@ def write_atomic_many(items, what: str = "file") -> list[Path]:
     return [path for path, _ in items]
 
 
+def file_mode(path: Path) -> int:
+    """The permission bits a write in place of ``path`` would leave: its own if it exists,
+    else a new file's under the process's umask."""
+    return path.stat().st_mode & 0o7777 if path.exists() else 0o666 & ~_UMASK
+
+
 @contextlib.contextmanager
-def _signals_held():
+def signals_held():
     """Within the block, SIGINT and SIGTERM are recorded instead of handled; at its end the
     previous handlers come back and each recorded signal is raised again through them. (A signal
     mask would not do: the kernel hands a process's signal to any thread that does not block it,

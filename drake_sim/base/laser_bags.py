@@ -1,4 +1,5 @@
-"""ROS 1 and ROS 2 bags as ``LaserLog`` (``drake_sim.base.laser_scans``), read with ``rosbags``.
+"""ROS 1 and ROS 2 bags as ``LaserLog`` (``drake_sim.base.laser_scans``), read with ``rosbags``
+(a lone ``.mcap`` file, which ``rosbags`` does not open, with ``drake_sim.base.mcap_files``).
 
 The scan topic is the ``sensor_msgs/LaserScan`` topic (the one with the most messages when there
 are several) unless named; the odometry is a ``nav_msgs/Odometry`` topic unless named, else the
@@ -15,10 +16,8 @@ import numpy as np
 
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_scans import LaserLog, LaserScanRecord, no_echo_to_inf
-
-SCAN_TYPE = "sensor_msgs/msg/LaserScan"
-ODOM_TYPE = "nav_msgs/msg/Odometry"
-TF_TYPE = "tf2_msgs/msg/TFMessage"
+from drake_sim.base.mcap_files import McapLogReader
+from drake_sim.base.ros_messages import ODOM_TYPE, SCAN_TYPE, TF_TYPE
 
 
 def read_bag(
@@ -39,8 +38,13 @@ def read_bag(
 
     path = Path(path)
     try:
-        reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        if path.is_file() and path.suffix.lower() == ".mcap":  # a lone file, not rosbag2's folder
+            reader = McapLogReader(path)
+        else:
+            reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
         reader.open()
+    except ConfigError:
+        raise
     except Exception as e:  # rosbags raises its own error types per format
         raise ConfigError(f"{path}: not a ROS bag that can be read ({e})") from None
     try:

@@ -38,7 +38,9 @@ LOG_ONLY = (
     "no_loop_closure",
 )
 """Options that mean something only with ``--log``."""
-SIMULATION_ONLY = ("arena", "world", "start", "route", "teleop", "lidar", "record", "duration")
+SIMULATION_ONLY = (
+    "arena", "world", "start", "route", "teleop", "lidar", "record", "record_log", "duration",
+)  # fmt: skip
 """Options of a simulated run that a log's run refuses."""
 
 

@@ -26,6 +26,7 @@ from diagrams.mapping_scenario import (
 from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap, save_map
+from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.base.planar import wrap_angle
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
@@ -40,6 +41,7 @@ from drake_sim.runs.lidar_robot import (
 )
 from drake_sim.runs.loop import SimulationRun
 from drake_sim.runs.recipe import AppRecipe, CliText, Flag, InputFile, Inputs
+from drake_sim.runs.ros_recording import RECORD_LOG_FLAG, close_ros_log, open_ros_log
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
 from drake_sim.systems.viewer.teleop import BUTTONS
 from drake_sim.worlds.arena import Arena, arena_grid
@@ -86,7 +88,8 @@ class MappingRun(SimulationRun):
     ``make_mapping_diagram``'s keywords (``meshcat``, ``teleop``: the Meshcat keys drive
     instead of the route, ``keyframes``: keep the growing map in a Meshcat recording);
     ``out``: where ``finish`` saves the map (``maps/<arena>`` when None); ``world_map``: the
-    map the arena was made from, whose known cells the map is scored on. The scenario's
+    map the arena was made from, whose known cells the map is scored on; ``log_writer``:
+    the ROS 2 log to write the run to (``drake_sim.runs.ros_recording``). The scenario's
     ``random_seed`` seeds the odometry errors and the lidar noise."""
 
     check_period = CHECK_PERIOD
@@ -103,6 +106,7 @@ class MappingRun(SimulationRun):
         out: Path | str | None = None,
         arena_file: Path | str = "arena",
         world_map: OccupancyMap | None = None,
+        log_writer: McapLogWriter | None = None,
         **diagram,
     ):
         self.scenario = scenario
@@ -111,8 +115,16 @@ class MappingRun(SimulationRun):
         self.arena = arena
         self.waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
         self.teleop = diagram.get("teleop", False)
-        diagram = make_mapping_diagram(scenario, robot, arena, self.waypoints, **diagram)
-        super().__init__(diagram, scenario.random_seed, realtime=realtime)
+        self._log = log_writer
+        try:
+            diagram = make_mapping_diagram(
+                scenario, robot, arena, self.waypoints, log_writer=log_writer, **diagram
+            )
+            super().__init__(diagram, scenario.random_seed, realtime=realtime)
+        except BaseException:
+            if log_writer is not None:
+                log_writer.abort()
+            raise
         self._slam = self.diagram.GetSubsystemByName("slam")
         self._truth_log = self.diagram.GetSubsystemByName("log_true_pose")
         self._route = self.diagram.GetSubsystemByName("route_follower") if not self.teleop else None
@@ -214,8 +226,16 @@ class MappingRun(SimulationRun):
     def finish(self) -> MappingReport:
         """Saves the map at ``out`` when the run is complete (the route driven to its end, or a
         teleop run, which Ctrl-C ends), else beside it as ``NAME.partial``: a run stopped or
-        failed early never replaces a map that was there. Returns the report."""
-        if self.end == "route_done" or self.teleop:
+        failed early never replaces a map that was there; the ROS 2 log likewise. Returns the
+        report."""
+        complete = self.end == "route_done" or self.teleop
+        close_ros_log(
+            self._log,
+            complete=complete,
+            seconds=self.context.get_time(),
+            final_map=self.occupancy_map(),
+        )
+        if complete:
             self.files = self.save_map(self.out)
         else:
             self.files = self.save_map(self.out.with_name(f"{self.out.name}.partial"))
@@ -268,7 +288,8 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
     """The recipe's run: the scenario's arena (or ``world``, a map's world, from ``start``) and
     route; ``options``: ``teleop`` (drive with
     the Meshcat keys instead of the route), ``out`` (the map files, default
-    ``maps/<arena>``), ``record`` (keep the map's drawings in the recording)."""
+    ``maps/<arena>``), ``record`` (keep the map's drawings in the recording), ``record_log``
+    (a ROS 2 log, ``FILE.mcap``, of the run)."""
     scenario = inputs.scenario
     teleop = bool(recipe.option(options, "teleop", False))
     arena_file, arena, world_map = load_world(scenario)
@@ -287,6 +308,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Mappin
         out=recipe.option(options, "out", None),
         arena_file=arena_file,
         world_map=world_map,
+        log_writer=open_ros_log(options),
     )
 
 
@@ -312,6 +334,7 @@ RECIPE = AppRecipe(
                 "help": f"map files to write, without extension (default {DEFAULT_OUT}/<arena>)",
             },
         ),
+        RECORD_LOG_FLAG,
     ),
     cli=CliText(
         seed="random seed (odometry, lidar)",

@@ -32,6 +32,7 @@ from drake_sim.runs.lidar_robot import (
 )
 from drake_sim.runs.navigation import CHECK_PERIOD, NavigationReport, NavigationRun
 from drake_sim.runs.recipe import AppRecipe, CliText, Flag, InputFile, Inputs
+from drake_sim.runs.ros_recording import RECORD_LOG_FLAG, open_ros_log
 from drake_sim.systems.viewer.goal_panel import GoalPanel
 from drake_sim.worlds.arena import arena_grid
 from drake_sim.worlds.map_world import check_map_agrees
@@ -89,6 +90,10 @@ class NavigateRun(NavigationRun):
                 raise
         finally:
             panel.remove()
+
+    def log_complete(self) -> bool:
+        """Goals from the page end with Ctrl-C: such a run's log is complete."""
+        return self.interactive or super().log_complete()
 
     def summary(self, report: NavigationReport) -> str:
         reached = sum(g.reached for g in report.goals)
@@ -169,7 +174,8 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
     ``goal`` ([x, y, yaw_deg]),
     ``goals`` (a goals file, a number of random goals, or a list of ``[x, y, yaw_rad]``),
     ``initial_pose`` (AMCL's first
-    guess, [x, y, yaw_deg]; default the true start), ``global_localization``; with a viewer and
+    guess, [x, y, yaw_deg]; default the true start), ``global_localization``, ``record_log``
+    (a ROS 2 log, ``FILE.mcap``, of the run); with a viewer and
     no goals, the goals come from the page (``headless`` False)."""
     scenario, robot = inputs.scenario, inputs.robot
     map_file = recipe.option(options, "map")
@@ -233,6 +239,7 @@ def make_run(inputs: Inputs, options, *, meshcat=None, realtime=False) -> Naviga
         meshcat=meshcat,
         realtime=realtime,
         interactive=interactive,
+        log_writer=open_ros_log(options),
     )
 
 
@@ -280,6 +287,7 @@ RECIPE = AppRecipe(
             },
         ),
         LIDAR_FLAG,
+        RECORD_LOG_FLAG,
         _pose_flag("--goal", "one goal: x, y (m), yaw (degrees)", "goals"),
         recipe.file_flag("--goals", "goals file", "goals YAML", group="goals"),
         _pose_flag("--initial-pose", "AMCL's first guess: x, y (m), yaw (deg)", "start"),

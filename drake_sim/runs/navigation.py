@@ -26,10 +26,12 @@ from diagrams.navigation import make_navigation_diagram
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
+from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.base.planar import wrap_angle, wrap_angle_exact
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.runs.loop import SimulationRun
+from drake_sim.runs.ros_recording import close_ros_log
 from drake_sim.worlds.arena import Arena
 
 CHECK_PERIOD = 0.1
@@ -118,7 +120,8 @@ class NavigationRun(SimulationRun):
     particles over the whole map instead. With no ``occupancy_map`` there is no AMCL: the
     robot localises with the live SLAM (or its odometry) and plans on what its lidar has seen
     (``diagrams.navigation``). The scenario's ``random_seed`` seeds the odometry errors, the
-    lidar noise and AMCL.
+    lidar noise and AMCL. With a ``log_writer`` the run is written as a ROS 2 log, closed by
+    ``finish`` (``drake_sim.runs.ros_recording``).
     """
 
     check_period = CHECK_PERIOD
@@ -139,25 +142,33 @@ class NavigationRun(SimulationRun):
         global_localization: bool = False,
         meshcat: Meshcat | None = None,
         realtime: bool = False,
+        log_writer: McapLogWriter | None = None,
     ):
         self.scenario = scenario
         self.robot = robot
         self.goals = [np.asarray(g, dtype=float) for g in goals]  # [x, y, yaw rad]
         if initial_estimate is None and not global_localization:
             initial_estimate = start  # RViz's "2D Pose Estimate" on the robot
-        diagram = make_navigation_diagram(
-            scenario,
-            robot,
-            world,
-            occupancy_map,
-            start=start,
-            initial_estimate=initial_estimate,
-            initial_covariance=initial_covariance,
-            global_localization=global_localization,
-            goals=self.goals,
-            meshcat=meshcat,
-        )
-        super().__init__(diagram, scenario.random_seed, realtime=realtime)
+        self._log = log_writer
+        try:
+            diagram = make_navigation_diagram(
+                scenario,
+                robot,
+                world,
+                occupancy_map,
+                start=start,
+                initial_estimate=initial_estimate,
+                initial_covariance=initial_covariance,
+                global_localization=global_localization,
+                goals=self.goals,
+                meshcat=meshcat,
+                log_writer=log_writer,
+            )
+            super().__init__(diagram, scenario.random_seed, realtime=realtime)
+        except BaseException:
+            if log_writer is not None:
+                log_writer.abort()
+            raise
         self.navigator = self.diagram.GetSubsystemByName("navigator")
         self.amcl = None if occupancy_map is None else self.diagram.GetSubsystemByName("amcl")
         self._plant = self.diagram.GetSubsystemByName("plant")
@@ -298,6 +309,27 @@ class NavigationRun(SimulationRun):
         self.collisions += int(touching)
 
     # --- the report ----------------------------------------------------------------------
+
+    def log_complete(self) -> bool:
+        """Whether the run went to its end (its log is then complete): not stopped, not
+        failed."""
+        return self.end not in ("stopped", self.failed_end)
+
+    def finish(self) -> NavigationReport:
+        """Closes the ROS 2 log (if any: ``NAME.partial.mcap`` unless ``log_complete``, with
+        the live SLAM's final map when it has one) and returns the report."""
+        slam = "slam"
+        final_map = None
+        if self._log is not None and self.diagram.HasSubsystemNamed(slam):
+            system = self.diagram.GetSubsystemByName(slam)
+            final_map = system.slam(system.GetMyContextFromRoot(self.context)).map()
+        close_ros_log(
+            self._log,
+            complete=self.log_complete(),
+            seconds=self.context.get_time(),
+            final_map=final_map,
+        )
+        return self.report()
 
     def localization_errors(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(times, position errors m, heading errors deg)`` of AMCL against the truth, at

@@ -8,6 +8,7 @@ import pytest
 import drake_sim.navigate as mut
 import drake_sim.runs.navigate as navigate_app
 from drake_sim.base import cli
+from drake_sim.base.mcap_files import McapLogReader
 from tests import navigation_helpers as nh
 from tests.cli_helpers import assert_bad_input, run_module
 
@@ -56,6 +57,24 @@ def test_one_goal_is_reached_and_reported(room_map, tmp_path, capsys):
     assert report["goals"][0]["position_error_m"] < 0.05
     assert report["collisions"] == 0 and report["seed"] == 3
     assert "1 of 1 goals reached" in capsys.readouterr().out
+
+
+def test_a_run_is_recorded_as_a_ros2_log_with_the_map_and_the_estimate(room_map, tmp_path):
+    log = tmp_path / "nav.mcap"
+    args = ["--headless", "--map", str(room_map), "--goal", "0", "-1", "90"]
+    assert cli.run(mut.main, [*args, "--record-log", str(log), "--seed", "3"]) == 0
+    reader = McapLogReader(log)
+    reader.open()
+    try:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        assert counts["/map"] == 1 and counts["/tf_static"] == 1  # the saved map, latched
+        assert counts["/scan"] > 10 and counts["/odom"] == counts["/tf"] == 4 * counts["/scan"]
+        tf = next(c for c in reader.connections if c.topic == "/tf")
+        _, _, raw = next(iter(reader.messages([tf])))
+        frames = [t.child_frame_id for t in reader.deserialize(raw, tf.msgtype).transforms]
+        assert frames == ["base_footprint", "odom"]  # odom -> base, map -> odom (AMCL's)
+    finally:
+        reader.close()
 
 
 def _run(*args):

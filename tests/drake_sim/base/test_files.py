@@ -79,7 +79,7 @@ def test_a_signal_during_the_renames_waits_for_the_last_one():
     delivered = []
     previous = signal.signal(signal.SIGINT, lambda *_: delivered.append("SIGINT"))
     try:
-        with mut._signals_held():
+        with mut.signals_held():
             os.kill(os.getpid(), signal.SIGINT)
             assert delivered == []  # held while the files are renamed
         assert delivered == ["SIGINT"]  # delivered at the block's end

@@ -7,8 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drake_sim.base import ros_messages as rm
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_logs import read_log
+from drake_sim.base.mcap_files import McapLogWriter
 
 rosbags = pytest.importorskip("rosbags")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
@@ -137,6 +139,27 @@ def test_topics_are_checked(tmp_path):
     junk = tmp_path / "junk.bag"
     junk.write_bytes(b"#ROSBAG V2.0\nnot really")
     with pytest.raises(ConfigError, match="not a ROS bag that can be read"):
+        read_log(junk)
+
+
+def test_a_lone_mcap_file_reads_like_a_bag(tmp_path):
+    path = tmp_path / "run.mcap"
+    with McapLogWriter(path) as w:
+        laser = rm.transform(0.0, "base_footprint", "base_scan", [-0.06, 0.01, 0.1], 0.17)
+        w.write("/tf_static", rm.tf_message([laser]), 0.0, latched=True)
+        for k, t in enumerate([0.2, 0.4]):
+            w.write("/odom", rm.odometry(t, "odom", "base_footprint", [k, 0.0, 0.1], [0, 0]), t)
+            scan = rm.laser_scan(t, "base_scan", -1.0, 1.0, 0.1, 10.0, [1.0, np.inf, 12.0])
+            w.write("/scan", scan, t)
+    log = read_log(path)
+    assert log.scan_topic == "/scan" and log.odom_topic == "/odom"
+    assert [s.time for s in log.scans] == pytest.approx([0.2, 0.4])
+    np.testing.assert_allclose(log.scans[1].odometry, [1.0, 0.0, 0.1], atol=1e-9)
+    np.testing.assert_allclose(log.laser_pose, [-0.06, 0.01, 0.1], atol=1e-9)
+    assert log.scans[0].ranges[0] == 1.0 and np.all(np.isinf(log.scans[0].ranges[1:]))
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"not an mcap file at all")
+    with pytest.raises(ConfigError, match="junk.mcap: not an MCAP file"):
         read_log(junk)
 
 
