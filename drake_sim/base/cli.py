@@ -206,20 +206,33 @@ def stop_on_signals(signals: Sequence[int] = STOP_SIGNALS) -> Iterator[None]:
     """Within the block, each of ``signals`` raises ``KeyboardInterrupt`` in the main thread.
 
     So SIGTERM stops a run the way Ctrl-C does (Drake's ``Simulator.AdvanceTo`` checks for
-    Python signals as it steps), and SIGINT does even where a parent process ignored it. The
-    previous handlers come back at the end. Outside the main thread it does nothing.
+    Python signals as it steps), and SIGINT does even where a parent process ignored it. After
+    a stop, errors in finalizers (``sys.unraisablehook``: objects the stop interrupted while
+    they were built) are not printed. The previous handlers come back at the end. Outside the
+    main thread it does nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     handler = _SignalStop()
     previous = {s: signal.signal(s, handler) for s in signals}
+    previous_hook = sys.unraisablehook
+
+    def quiet_after_a_stop(report) -> None:
+        # An object the stop interrupted half-built (llvmlite's OutputString while numba
+        # compiles) fails in its __del__ later: "Exception ignored ... no attribute '_ptr'".
+        # That is the stop's doing, not an error to show the user.
+        if handler.received is None:
+            previous_hook(report)
+
+    sys.unraisablehook = quiet_after_a_stop
     try:
         yield
     finally:
         handler.noticed.set()  # the block is over: whatever stop came has been handled
         for s, old in previous.items():
             signal.signal(s, old if old is not None else signal.SIG_DFL)
+        sys.unraisablehook = previous_hook
 
 
 def positive_float(text: str) -> float:
