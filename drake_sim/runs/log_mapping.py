@@ -27,6 +27,7 @@ from drake_sim.base.map_files import save_map
 from drake_sim.runs import command
 from drake_sim.runs.recipe import AppRecipe
 from drake_sim.systems.estimation.log_slam import run_log_slam
+from drake_sim.systems.viewer.log_view import LogView
 
 DEFAULT_OUT = Path("maps")
 LOG_ONLY = (
@@ -134,15 +135,26 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
         if not all(math.isfinite(v) for v in (x, y, yaw)):
             raise ConfigError(f"--laser-pose must be finite numbers, got {args.laser_pose}")
         laser = np.array([x, y, math.radians(yaw)])
-    if not args.headless:
-        print("--log runs without the viewer (the map and trajectory are written)", flush=True)
     config = inputs.scenario.slam
     loops = dc.replace(config.loop_closure, enabled=not args.no_loop_closure)
+    meshcat = view = None
+    if not args.headless:
+        from pydrake.geometry import StartMeshcat  # noqa: PLC0415 (Meshcat's server starts here)
+
+        meshcat = StartMeshcat()
+        view = LogView(meshcat)
+    cli.announce(meshcat, f"mapping {args.log.name}")
     start = time.perf_counter()
     result = run_log_slam(
-        log, dc.replace(config, loop_closure=loops), laser_pose=laser, should_stop=cli.stop_received
+        log,
+        dc.replace(config, loop_closure=loops),
+        laser_pose=laser,
+        should_stop=cli.stop_received,
+        on_scan=_drawer(view),
     )
     wall = time.perf_counter() - start
+    if view is not None:
+        view.finish(result.slam, result.poses)
     end = "stopped" if result.stopped else "done"
     out = args.out or DEFAULT_OUT / _name(args.log)
     trajectory = args.trajectory
@@ -182,7 +194,29 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
     )
     if args.report:
         cli.write_text(args.report, json.dumps(report.to_dict(), indent=2) + "\n", "report")
+    if meshcat is not None and not result.stopped:
+        _linger(meshcat)
     return cli.EXIT_OK
+
+
+def _drawer(view: LogView | None):
+    """``run_log_slam``'s ``on_scan`` for ``view`` (None: nothing drawn)."""
+    if view is None:
+        return None
+    return lambda slam, scan: view.update(
+        slam, scan.time, scan.ranges, scan.angles, scan.range_min, scan.range_max
+    )
+
+
+def _linger(meshcat) -> None:
+    """Keeps the page with the final map open until Ctrl-C."""
+    cli.announce(meshcat, "showing the map")
+    try:
+        while True:
+            time.sleep(0.1)
+    except BaseException as e:
+        if not cli.is_stop(e):
+            raise
 
 
 def _name(path: Path) -> str:

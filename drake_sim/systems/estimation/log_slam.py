@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from drake_sim.base import cli
-from drake_sim.base.laser_scans import LaserLog
+from drake_sim.base.laser_scans import LaserLog, LaserScanRecord
 from drake_sim.base.planar import compose, relative_pose
 from drake_sim.systems.estimation.graph_slam import GraphSlam, make_slam
 from drake_sim.systems.estimation.scan_matching_slam import ScanMatchingSlam
@@ -83,6 +83,7 @@ def run_log_slam(
     laser_pose=None,
     should_stop: Callable[[], bool] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    on_scan: Callable[[object, LaserScanRecord], None] | None = None,
 ) -> LogSlamResult:
     """Runs ``ScanMatchingSlam`` over every scan of ``log`` in file order.
 
@@ -93,6 +94,7 @@ def run_log_slam(
         should_stop: polled between scans; True ends the run early (``stopped``), as does
             a user stop (Ctrl-C, SIGTERM: ``cli.is_stop``) raised while a scan is processed.
         progress: called with (scans done, scans in all) every 100 scans.
+        on_scan: called with the SLAM and the scan after each scan it took (a viewer).
     """
     config = dc.replace(config, map_size=map_side(log, config))
     sensor = log.laser_pose if laser_pose is None else np.asarray(laser_pose, dtype=float)
@@ -129,6 +131,8 @@ def run_log_slam(
                 jumps += 1  # the scan matched better without the step: it was a jump
                 odom = alternative
             times.append(scan.time)
+            if on_scan is not None:
+                on_scan(slam, scan)
             if progress is not None and (k + 1) % 100 == 0:
                 progress(k + 1, len(log.scans))
     except BaseException as e:  # a stop lands wherever the scan's processing was

@@ -2,6 +2,7 @@
 trajectory and report written; a stopped run keeps complete files; bad input is one line."""
 
 import json
+import signal
 import subprocess
 import sys
 
@@ -42,7 +43,9 @@ def test_a_carmen_log_is_mapped_with_its_trajectory_and_report(tmp_path, drive, 
         "--report", report, "--headless",
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
-    assert result.stdout.startswith(f"done: {len(truth)} of {len(truth)} scans")
+    first, second = result.stdout.splitlines()[:2]
+    assert first == "mapping room.clf headless (Ctrl-C stops)"
+    assert second.startswith(f"done: {len(truth)} of {len(truth)} scans")
     rows = np.loadtxt(traj)
     assert rows.shape == (len(truth), 8)
     np.testing.assert_allclose(rows[:, 0], 100.0 + np.arange(len(truth)) / 5.0, atol=1e-6)
@@ -68,7 +71,7 @@ def test_a_stopped_run_writes_partial_files_and_keeps_complete_ones(
     monkeypatch.setattr(cli, "stop_received", lambda: len(calls.append(0) or calls) > 30)
     result = run_module("drake_sim.mapping", *args)
     assert result.returncode == 0, result.stderr
-    assert result.stdout.startswith("stopped: 30 of")
+    assert result.stdout.splitlines()[1].startswith("stopped: 30 of")
     assert (out.with_suffix(".pgm").read_bytes(), traj.read_text()) == before
     assert len(np.loadtxt(tmp_path / "traj.partial.txt")) == 30
     assert (tmp_path / "room.partial.yaml").is_file()
@@ -87,6 +90,28 @@ def test_a_stopped_run_writes_partial_files_and_keeps_complete_ones(
 def test_bad_options_are_one_line(tmp_path, log_file, args, needle):
     args = [str(log_file) if a == "LOG" else a for a in args]
     assert_bad_input(run_module("drake_sim.mapping", *args, "--headless", cwd=tmp_path), needle)
+
+
+def test_with_the_viewer_the_map_stays_on_the_page_until_ctrl_c(tmp_path, log_file):
+    process = subprocess.Popen(
+        [sys.executable, "-m", "drake_sim.mapping", "--log", str(log_file), "--out",
+         str(tmp_path / "room")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        lines = []
+        while not lines or not lines[-1].startswith("showing the map at http"):
+            line = process.stdout.readline()
+            assert line, process.stderr.read()
+            lines.append(line.strip())
+        assert lines[0].startswith("mapping room.clf at http") and lines[1].startswith("done:")
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 0 and "Traceback" not in err, err
+    assert (tmp_path / "room.yaml").is_file()
 
 
 def test_a_malformed_log_is_one_line_from_a_real_process(tmp_path):
