@@ -6,7 +6,8 @@ order (``drake_sim.systems.estimation.log_slam``), with its pose graph and loop 
 (``slam.loop_closure``; ``--no-loop-closure``: the scan matcher alone), as slam_toolbox and
 Cartographer map a bag. Written at the end: the map as map_server
 files (``--out``, default ``maps/<log name>``), the trajectory in TUM format (``--trajectory``:
-``timestamp x y z qx qy qz qw``, the base's pose at each processed scan) and the report
+``timestamp x y z qx qy qz qw``, the base's pose at each processed scan, or the laser's with
+``--trajectory-frame sensor``) and the report
 (``--report``). A run stopped by Ctrl-C or SIGTERM writes ``NAME.partial`` files beside them
 and leaves complete ones alone; it exits 0, as a completed run does.
 """
@@ -24,6 +25,7 @@ from drake_sim.base import cli
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_logs import read_log, write_tum
 from drake_sim.base.map_files import save_map
+from drake_sim.base.planar import compose
 from drake_sim.runs import command
 from drake_sim.runs.recipe import AppRecipe
 from drake_sim.systems.estimation.log_slam import run_log_slam
@@ -32,6 +34,7 @@ from drake_sim.systems.viewer.log_view import LogView
 DEFAULT_OUT = Path("maps")
 LOG_ONLY = (
     "trajectory",
+    "trajectory_frame",
     "scan_topic",
     "odom_topic",
     "laser_pose",
@@ -81,6 +84,12 @@ def add_flags(p: argparse.ArgumentParser) -> None:
         "--trajectory",
         type=cli.output_file("trajectory"),
         help="with --log: write the base's pose at every scan here (TUM format)",
+    )
+    group.add_argument(
+        "--trajectory-frame",
+        choices=("base", "sensor"),
+        help="with --log: the trajectory's poses are the base's (default) or the laser's (the "
+        "frame the Kümmerle datasets' relations are in)",
     )
     group.add_argument("--scan-topic", help="with --log: the LaserScan topic (default: found)")
     group.add_argument("--odom-topic", help="with --log: the Odometry topic (default: found)")
@@ -166,7 +175,10 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
     if result.scans:
         files = [str(p) for p in save_map(result.slam.map(), out)]
         if trajectory is not None:
-            write_tum(trajectory, result.times, result.poses)
+            poses = result.poses
+            if args.trajectory_frame == "sensor":
+                poses = compose(poses, result.slam.X_base_sensor)
+            write_tum(trajectory, result.times, poses)
     span = float(np.ptp(result.times)) if result.scans else 0.0
     report = LogMappingReport(
         end=end,

@@ -9,11 +9,17 @@ import sys
 import numpy as np
 import pytest
 
+import drake_sim.mapping as mut_app
 from drake_sim.base import cli
 from drake_sim.base.map_files import load_map
 from drake_sim.runs import log_mapping as mut
 from tests import log_helpers as lh
 from tests.cli_helpers import assert_bad_input, run_module
+
+
+def _main(*args):
+    return cli.run(mut_app.main, ["--headless", *args])
+
 
 REPORT_KEYS = {
     "end", "log", "scan_topic", "odom_topic", "laser_pose", "scans", "log_duration_s",
@@ -90,6 +96,20 @@ def test_a_stopped_run_writes_partial_files_and_keeps_complete_ones(
 def test_bad_options_are_one_line(tmp_path, log_file, args, needle):
     args = [str(log_file) if a == "LOG" else a for a in args]
     assert_bad_input(run_module("drake_sim.mapping", *args, "--headless", cwd=tmp_path), needle)
+
+
+def test_the_trajectory_is_the_base_s_or_the_sensor_s(tmp_path, log_file):
+    base, sensor = tmp_path / "base.txt", tmp_path / "sensor.txt"
+    args = ["--log", str(log_file), "--laser-pose", "0.1", "0", "90", "--out"]
+    assert _main(*args, str(tmp_path / "a"), "--trajectory", str(base)) == 0
+    frame = ["--trajectory-frame", "sensor"]
+    assert _main(*args, str(tmp_path / "b"), "--trajectory", str(sensor), *frame) == 0
+    b, s = np.loadtxt(base), np.loadtxt(sensor)
+    yaw = 2 * np.arctan2(b[:, 6], b[:, 7])
+    np.testing.assert_allclose(s[:, 1], b[:, 1] + 0.1 * np.cos(yaw), atol=2e-6)
+    np.testing.assert_allclose(s[:, 2], b[:, 2] + 0.1 * np.sin(yaw), atol=2e-6)
+    turned = 2 * np.arctan2(s[:, 6], s[:, 7])
+    np.testing.assert_allclose(np.cos(turned - yaw), 0.0, atol=1e-6)  # 90 degrees on
 
 
 def test_with_the_viewer_the_map_stays_on_the_page_until_ctrl_c(tmp_path, log_file):
