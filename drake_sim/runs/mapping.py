@@ -229,20 +229,21 @@ class MappingRun(SimulationRun):
         failed early never replaces a map that was there; the ROS 2 log likewise. Returns the
         report."""
         complete = self.end == "route_done" or self.teleop
-        close_ros_log(
-            self._log,
-            complete=complete,
-            seconds=self.context.get_time(),
-            final_map=self.occupancy_map(),
-        )
-        if complete:
-            self.files = self.save_map(self.out)
-        else:
-            self.files = self.save_map(self.out.with_name(f"{self.out.name}.partial"))
-            kept = (
-                f"; {self.out}.yaml is kept as it was" if Path(f"{self.out}.yaml").exists() else ""
+        try:
+            if complete:
+                self.files = self.save_map(self.out)
+            else:
+                self.files = self.save_map(self.out.with_name(f"{self.out.name}.partial"))
+                old = Path(f"{self.out}.yaml")
+                kept = f"; {old} is kept as it was" if old.exists() else ""
+                print(f"the run ended early ({self.end}): its partial map is {self.files[1]}{kept}")
+        finally:  # the log is written whatever became of the map
+            close_ros_log(
+                self._log,
+                complete=complete,
+                seconds=self.context.get_time(),
+                final_map=self.occupancy_map(),
             )
-            print(f"the run ended early ({self.end}): its partial map is {self.files[1]}{kept}")
         return self.report()
 
     def summary(self, report: MappingReport) -> str:

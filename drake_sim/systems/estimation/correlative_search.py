@@ -65,6 +65,22 @@ def make_table(
     return SearchTable(fine, coarse, float(resolution), (float(low[0]), float(low[1])), block)
 
 
+def occupied_points(log_odds: np.ndarray, resolution: float, origin, low, high) -> np.ndarray:
+    """(n, 2) the centres of the cells with positive ``log_odds`` (a ``LogOddsGrid``'s array:
+    row index grows with y, cell [0, 0]'s corner at ``origin``) inside the box [low, high]."""
+    first = np.floor((np.asarray(low, float) - origin) / resolution).astype(int)
+    last = np.ceil((np.asarray(high, float) - origin) / resolution).astype(int)
+    rows, cols = log_odds.shape
+    c0, r0 = (max(0, int(v)) for v in first)
+    c1, r1 = min(cols, int(last[0])), min(rows, int(last[1]))
+    if c1 <= c0 or r1 <= r0:
+        return np.zeros((0, 2))
+    r, c = np.nonzero(log_odds[r0:r1, c0:c1] > 0)
+    return np.column_stack(
+        [origin[0] + (c + c0 + 0.5) * resolution, origin[1] + (r + r0 + 0.5) * resolution]
+    )
+
+
 @dc.dataclass
 class SearchResult:
     """The best pose of the window and its score (mean table value of the points)."""

@@ -46,6 +46,7 @@ import numpy as np
 
 from drake_sim.base.map_files import OccupancyMap, save_map
 from drake_sim.base.planar import compose, relative_pose
+from drake_sim.systems.estimation.correlative_search import make_table, occupied_points, search
 from drake_sim.systems.estimation.match_updates import update_level
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 from drake_sim.systems.estimation.scan_matcher import (
@@ -107,6 +108,7 @@ class ScanMatchingSlam:
         self.map_updates = 0
         self.rejected = 0  # Matches rejected by the gate (the odometry's prediction was kept).
         self.degenerate = 0  # Matches with a direction the scan did not constrain.
+        self.recovered = 0  # Rejected matches a search around the prediction found again.
         self.last_match: MatchResult | None = None
         # The last scan put into the map: (ranges, angles, range_max, range_min, normals), as
         # ``redraw`` takes them.
@@ -160,8 +162,8 @@ class ScanMatchingSlam:
             alternative_odom_pose: another reading of the odometry for this scan (a log whose
                 odometry may have jumped: the reading without the jump); the scan is matched
                 from both predictions and the better accepted match is kept (the odometry's
-                prediction if neither is accepted), and the odometry goes on from the reading
-                kept.
+                when both find the same pose, or its prediction if neither is accepted), and
+                the odometry goes on from the reading kept.
         """
         ranges = np.asarray(ranges, dtype=float)
         angles = np.asarray(angles, dtype=float)
@@ -183,7 +185,8 @@ class ScanMatchingSlam:
                 alternative = np.array(alternative_odom_pose, dtype=float)
                 other = compose(self._pose, relative_pose(self._odom, alternative))
                 second = self._scored_match(sensor_points, normals[hit], other)
-                if second[1] and (not accepted or second[2] > score):
+                better = second[2] > score and not _same_pose(second[0], pose)
+                if second[1] and (not accepted or better):
                     (pose, accepted, score), odom_pose = second, alternative
                 self.rejected = rejected + (0 if accepted else 1)  # one count per scan
             self._pose = pose
@@ -218,13 +221,26 @@ class ScanMatchingSlam:
             return prediction
         points = transform_points(self.X_base_sensor, sensor_points)
         c, s = math.cos(self.X_base_sensor[2]), math.sin(self.X_base_sensor[2])
+        directions = normals @ np.array([[c, s], [-s, c]])
+        result = self._gated_match(points, directions, prediction)
+        if result is None:
+            result = self._recover(points, directions, prediction)
+            if result is None:
+                self.rejected += 1
+                return prediction
+            self.recovered += 1
+        return self._remap(result.pose, prediction, points)
+
+    def _gated_match(self, points, directions, prediction) -> MatchResult | None:
+        """The match from ``prediction``, or None when the gate rejects it."""
+        config = self.config
         result = match_scan(
             self._pyramid(),
             points,
             prediction,
             iterations=config.iterations,
             prior_weight=config.prior_weight,
-            hit_directions=normals @ np.array([[c, s], [-s, c]]),
+            hit_directions=directions,
             hit_offset=config.hit_offset,
         )
         self.last_match = result
@@ -234,9 +250,33 @@ class ScanMatchingSlam:
             or abs(offset[2]) > math.radians(config.max_correction_deg)
             or result.scores[self.map_level] < config.min_score
         ):
-            self.rejected += 1
-            return prediction
-        return self._remap(result.pose, prediction, points)
+            return None
+        return result
+
+    def _recover(self, points, directions, prediction) -> MatchResult | None:
+        """After a rejected match: the exhaustive search's best pose within the recovery window
+        (``SlamConfig.recovery_window``), matched and gated from there; None if there is none."""
+        config = self.config
+        window, turn = config.recovery_window, math.radians(config.recovery_window_deg)
+        if window <= 0:
+            return None
+        grid = self.grids[self.map_level]
+        placed = transform_points(prediction, points)
+        reach = window + float(np.hypot(*points.T).max()) * turn + grid.resolution
+        world = occupied_points(
+            grid.log_odds, grid.resolution, grid.origin, placed.min(0) - reach,
+            placed.max(0) + reach,
+        )  # fmt: skip
+        if len(world) < config.min_points:
+            return None
+        table = make_table(world, grid.resolution, sigma=1.5 * grid.resolution, margin=reach)
+        found = search(
+            table, points, prediction, window_xy=window, window_yaw=turn,
+            yaw_step=math.radians(0.5),
+        )  # fmt: skip
+        if found.score < config.recovery_min_score:
+            return None
+        return self._gated_match(points, directions, found.pose)
 
     def _remap(self, pose, prediction, points) -> np.ndarray:
         """``pose``, with the prediction's position along a direction the scan cannot see."""
@@ -304,3 +344,10 @@ class ScanMatchingSlam:
                 self._match_maps[k] = level
                 self._match_versions[k] = grid.version
         return self._match_maps
+
+
+def _same_pose(a, b, distance: float = 0.02, angle: float = math.radians(0.5)) -> bool:
+    """Whether two matches found one pose (the search after a rejected match can bring a
+    prediction far off to where the odometry's own match is)."""
+    offset = relative_pose(a, b)
+    return math.hypot(offset[0], offset[1]) <= distance and abs(offset[2]) <= angle

@@ -61,6 +61,15 @@ class SlamConfig:
     # than this fraction of the other, the position along it is the odometry's prediction (a
     # corridor). Measured: under 0.03 in a corridor, above 0.07 in rooms.
     degenerate_ratio: float = 0.05
+    # After a match the gate rejects, the scan is searched for exhaustively within this far of
+    # the prediction (m; 0: no search) and this many degrees (``correlative_search``) on the
+    # map's occupied cells, and matched again from the best pose there if it scores at least
+    # ``recovery_min_score`` (the table's mean at the scan's points). A log's odometry can be
+    # off by more than the gate for a scan (Intel's bag pairs some scans with odometry logged
+    # late: 0.2 to 0.4 m); the prediction then went into the map and matching never recovered.
+    recovery_window: float = 0.5
+    recovery_window_deg: float = 20.0
+    recovery_min_score: float = 0.6
     # A pose graph with loop closures over the matcher (``graph_slam.GraphSlam``); off by default.
     loop_closure: LoopClosureConfig = dc.field(default_factory=LoopClosureConfig)
 
@@ -77,11 +86,15 @@ class SlamConfig:
             "degenerate_ratio",
             "range_margin",
             "no_return_range",
+            "recovery_window",
+            "recovery_window_deg",
         ):
             if getattr(self, key) < 0:
                 raise ConfigError(f"{where}: '{key}' must not be negative")
         if self.levels < 1 or self.resolution * 2 ** (self.levels - 1) > self.map_size:
             raise ConfigError(f"{where}: 'levels' must be at least 1 and fit in 'map_size'")
+        if not 0.0 < self.recovery_min_score <= 1.0:
+            raise ConfigError(f"{where}: 'recovery_min_score' must be in (0, 1]")
         if not 0.5 < self.p_hit < 1.0:
             raise ConfigError(f"{where}: 'p_hit' must be in (0.5, 1), got {self.p_hit}")
         if not 0.0 <= self.hit_offset < 1.0:

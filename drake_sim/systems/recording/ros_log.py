@@ -73,6 +73,8 @@ class RosLogRecorder(LeafSystem):
         odometry_per_scan: odometry messages per scan.
         map_period: s between ``/map`` messages of the ``map`` input.
         static_map: a fixed map written once at the start (the ``map`` input then unused).
+        offset: s after each scan instant the messages go out (after the estimator's update,
+            ``SCAN_DELAY`` after the scan, has run).
     """
 
     def __init__(

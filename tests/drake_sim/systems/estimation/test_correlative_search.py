@@ -89,3 +89,15 @@ def test_no_points_leave_the_pose_where_it_was_and_no_hits_make_no_table():
     assert found.score == 0.0
     with pytest.raises(ValueError, match="at least one point"):
         mut.make_table(np.zeros((0, 2)), 0.05, sigma=0.1, margin=0.5)
+
+
+def test_occupied_points_are_the_centres_of_positive_cells_in_the_box():
+    log_odds = np.zeros((4, 5), np.float32)
+    log_odds[1, 2] = 2.0  # row 1 (y), column 2 (x)
+    log_odds[3, 4] = 0.5
+    log_odds[0, 0] = -1.0  # free
+    points = mut.occupied_points(log_odds, 0.5, (10.0, 20.0), (10.0, 20.0), (12.5, 22.0))
+    np.testing.assert_allclose(points, [[11.25, 20.75], [12.25, 21.75]])
+    inside = mut.occupied_points(log_odds, 0.5, (10.0, 20.0), (10.9, 20.4), (11.6, 21.1))
+    np.testing.assert_allclose(inside, [[11.25, 20.75]])
+    assert mut.occupied_points(log_odds, 0.5, (10.0, 20.0), (0.0, 0.0), (5.0, 5.0)).shape == (0, 2)

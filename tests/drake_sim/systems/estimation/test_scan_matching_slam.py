@@ -133,7 +133,7 @@ def test_a_match_beyond_the_gate_keeps_the_prediction():
     world = helpers.room()
     pose = np.array([-2.0, -2.0, 0.3])
     ranges, angles = helpers.lidar_scans(world, [pose, pose], seed=5)
-    gated = dc.replace(mut.SlamConfig(), max_correction=0.001)
+    gated = dc.replace(mut.SlamConfig(), max_correction=0.001, recovery_window=0.0)
     for config, expect_prediction in [(gated, True), (mut.SlamConfig(), False)]:
         dut = mut.ScanMatchingSlam(config, pose)
         dut.update(ranges[0], angles, (0.0, 0.0, 0.0), range_max=3.5)
@@ -146,6 +146,27 @@ def test_a_match_beyond_the_gate_keeps_the_prediction():
         else:
             assert math.hypot(*(result[:2] - pose[:2])) < 0.01 and dut.rejected == 0
         assert dut.last_match is not None
+
+
+@pytest.mark.parametrize("offset", [(0.4, 0.0, 0.0), (-0.25, 0.3, 0.2)])
+def test_a_prediction_beyond_the_gate_is_found_again_by_the_search(offset):
+    """Odometry off by more than the gate (0.3 m, 20 degrees) for one scan, as a stale reading
+    in a log: the search around the prediction finds the scan's pose; without it the pose stays
+    near the wrong prediction."""
+    world = helpers.room()
+    pose = np.array([-2.0, -2.0, 0.3])
+    ranges, angles = helpers.lidar_scans(world, [pose] * 4, seed=5)
+    for window in (0.5, 0.0):
+        dut = mut.ScanMatchingSlam(dc.replace(mut.SlamConfig(), recovery_window=window), pose)
+        for k in range(3):
+            dut.update(ranges[k], angles, (0.0, 0.0, 0.0), range_max=3.5)
+        result = dut.update(ranges[3], angles, offset, range_max=3.5)
+        if window:
+            assert math.hypot(*(result[:2] - pose[:2])) < 0.02
+            assert abs(result[2] - pose[2]) < math.radians(1.0)
+            assert (dut.rejected, dut.recovered) == (0, 1)
+        else:  # the prediction stands (rejected), or a wrong fit near it does
+            assert math.hypot(*(result[:2] - pose[:2])) > 0.2 and dut.recovered == 0
 
 
 def test_scans_with_too_few_returns_are_not_matched():
