@@ -179,22 +179,25 @@ class McapLogReader:
         try:
             reader = make_reader(self._file)
             summary = reader.get_summary()
-            if summary is None or summary.statistics is None:
+            if summary is None or summary.statistics is None:  # counted by a pass over it
                 counts: dict[int, int] = {}
-                for _, channel, _ in reader.iter_messages():
+                channels, schemas = {}, {}
+                for schema, channel, _ in reader.iter_messages():
                     counts[channel.id] = counts.get(channel.id, 0) + 1
-                self._file.seek(0)
-                summary = make_reader(self._file).get_summary()
+                    channels[channel.id] = channel
+                    if schema is not None:
+                        schemas[schema.id] = schema
             else:
                 counts = dict(summary.statistics.channel_message_counts)
+                channels, schemas = summary.channels, summary.schemas
         except Exception as e:  # mcap raises its own error types for a bad file
             self.close()
             raise ConfigError(f"{self.path}: not an MCAP file that can be read ({e})") from None
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore  # noqa: PLC0415
 
         self._store = get_typestore(Stores.EMPTY)  # the file's own message definitions
-        for channel in summary.channels.values() if summary is not None else ():
-            schema = summary.schemas.get(channel.schema_id)
+        for channel in channels.values():
+            schema = schemas.get(channel.schema_id)
             if channel.message_encoding not in ("cdr", "ros1") or schema is None:
                 continue
             msgtype = schema.name if "/msg/" in schema.name else schema.name.replace("/", "/msg/")

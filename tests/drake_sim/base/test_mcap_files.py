@@ -175,3 +175,24 @@ def test_messages_read_by_the_file_s_own_definitions(tmp_path):
         assert (message.value, message.note) == (7, "hi")
     finally:
         reader.close()
+
+
+def test_a_file_without_statistics_is_counted_by_reading_it(tmp_path):
+    path = tmp_path / "plain.mcap"
+    store = rm.typestore()
+    text, _ = store.generate_msgdef(rm.SCAN_TYPE, ros_version=2)
+    with open(path, "wb") as f:
+        writer = Writer(f, use_statistics=False, use_summary_offsets=False)
+        writer.start(profile="ros2")
+        schema = writer.register_schema(rm.SCAN_TYPE, "ros2msg", text.encode())
+        channel = writer.register_channel("/scan", "cdr", schema)
+        for k in range(3):
+            data = store.serialize_cdr(_scan(0.1 * k), rm.SCAN_TYPE)
+            writer.add_message(channel, log_time=k, data=bytes(data), publish_time=k)
+        writer.finish()
+    reader = mut.McapLogReader(path)
+    reader.open()
+    try:
+        assert [(c.topic, c.msgcount) for c in reader.connections] == [("/scan", 3)]
+    finally:
+        reader.close()
