@@ -5,11 +5,13 @@
 ``ros2`` profile, each message type's schema as ``ros2msg`` text (the type's definition and
 those it uses), CDR messages, one channel per topic with its offered QoS (``transient_local``
 for latched topics such as ``/tf_static`` and ``/map``), zstd-compressed chunks and a summary.
-Foxglove opens such a file as it is; ``ros2 bag play FILE.mcap`` replays it (Iron and later
-open a single file; Humble wants rosbag2's folder with its ``metadata.yaml``, which this does
-not write). The file appears only when ``close`` completes: until then the bytes go to a hidden
-temporary file beside it, which ``abort`` (or an error) removes, so a stopped run never replaces
-a complete log with a partial one (``drake_sim.base.files``).
+Such a file is what Foxglove opens as it is and ``ros2 bag play FILE.mcap`` replays from ROS 2
+Iron on (Humble wants rosbag2's folder with its ``metadata.yaml``, which this does not write);
+neither was run here: the tests check the file with the ``mcap`` library and ``rosbags``.
+
+The file appears only when ``close`` completes: until then the bytes go to a hidden temporary
+file beside it, which ``abort`` (or an error) removes, so a stopped run never replaces a
+complete log with a partial one (``drake_sim.base.files``).
 
 ``McapLogReader`` reads such a file (any single-file MCAP of CDR or ROS 1 messages) with the
 three things ``drake_sim.base.laser_bags`` uses of a ``rosbags`` reader: ``connections``,
