@@ -1,12 +1,12 @@
 """Meshcat display of offline SLAM on a recorded log (``python -m drake_sim.mapping --log``
-without ``--headless``): the map as it grows, the last scan at its matched pose, an arrow at the
-pose and the trajectory so far, under ``/log``; at the end the final map and the optimised
+without ``--headless``): the map and the trajectory so far as they grow, the last scan at its
+matched pose and an arrow at the pose, under ``/log``; at the end the final map and the optimised
 trajectory, the camera looking down on the whole map. What RViz shows while slam_toolbox or
 Cartographer run on a bag.
 
 Not a Drake system: a log is no simulation, so ``LogView.update`` is called after each scan
-and draws by the log's own clock (the map every ``map_period`` s of log, the scan and the
-trail every ``scan_period`` s), so a long log is drawn at a cost that does not grow with its
+and draws by the log's own clock (the map and the trail every ``map_period`` s of log, the
+scan every ``scan_period`` s), so a long log is drawn at a cost that does not grow with its
 rate.
 """
 
@@ -28,8 +28,8 @@ class LogView:
 
     Args:
         meshcat: the viewer.
-        map_period, scan_period: s of log time between drawings of the map, and of the scan
-            and trail.
+        map_period, scan_period: s of log time between drawings of the map and the trail, and
+            of the scan.
     """
 
     def __init__(self, meshcat: Meshcat, *, map_period: float = 10.0, scan_period: float = 0.5):
@@ -53,10 +53,10 @@ class LogView:
             self._last[1] = time
             hits = scan_points(ranges, angles, range_max, range_min, slam.X_base_sensor, np.inf)
             self._draw_scan(transform_points(pose, hits), pose)
-            self._draw_trail(np.array(self._trail))
-        if time - self._last[0] >= self._periods[0]:
+        if time - self._last[0] >= self._periods[0]:  # the trail too: it grows with the log
             self._last[0] = time
             self._draw_map(slam)
+            self._draw_trail(np.array(self._trail))
 
     def finish(self, slam, trajectory: np.ndarray) -> None:
         """The final map and the whole (optimised) ``trajectory`` ((n, 3) poses)."""
