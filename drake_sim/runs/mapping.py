@@ -41,7 +41,12 @@ from drake_sim.runs.lidar_robot import (
 )
 from drake_sim.runs.loop import SimulationRun
 from drake_sim.runs.recipe import AppRecipe, CliText, Flag, InputFile, Inputs
-from drake_sim.runs.ros_recording import RECORD_LOG_FLAG, close_ros_log, open_ros_log
+from drake_sim.runs.ros_recording import (
+    RECORD_LOG_FLAG,
+    close_ros_log,
+    dropped_on_error,
+    open_ros_log,
+)
 from drake_sim.systems.estimation.occupancy_grid import known_fraction, occupancy_iou
 from drake_sim.systems.viewer.teleop import BUTTONS
 from drake_sim.worlds.arena import Arena, arena_grid
@@ -116,15 +121,11 @@ class MappingRun(SimulationRun):
         self.waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
         self.teleop = diagram.get("teleop", False)
         self._log = log_writer
-        try:
+        with dropped_on_error(log_writer):
             diagram = make_mapping_diagram(
                 scenario, robot, arena, self.waypoints, log_writer=log_writer, **diagram
             )
             super().__init__(diagram, scenario.random_seed, realtime=realtime)
-        except BaseException:
-            if log_writer is not None:
-                log_writer.abort()
-            raise
         self._slam = self.diagram.GetSubsystemByName("slam")
         self._truth_log = self.diagram.GetSubsystemByName("log_true_pose")
         self._route = self.diagram.GetSubsystemByName("route_follower") if not self.teleop else None

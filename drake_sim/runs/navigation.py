@@ -31,7 +31,7 @@ from drake_sim.base.planar import wrap_angle, wrap_angle_exact
 from drake_sim.base.report import RunReport, run_times
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.runs.loop import SimulationRun
-from drake_sim.runs.ros_recording import close_ros_log
+from drake_sim.runs.ros_recording import close_ros_log, dropped_on_error
 from drake_sim.worlds.arena import Arena
 
 CHECK_PERIOD = 0.1
@@ -150,7 +150,7 @@ class NavigationRun(SimulationRun):
         if initial_estimate is None and not global_localization:
             initial_estimate = start  # RViz's "2D Pose Estimate" on the robot
         self._log = log_writer
-        try:
+        with dropped_on_error(log_writer):
             diagram = make_navigation_diagram(
                 scenario,
                 robot,
@@ -165,10 +165,6 @@ class NavigationRun(SimulationRun):
                 log_writer=log_writer,
             )
             super().__init__(diagram, scenario.random_seed, realtime=realtime)
-        except BaseException:
-            if log_writer is not None:
-                log_writer.abort()
-            raise
         self.navigator = self.diagram.GetSubsystemByName("navigator")
         self.amcl = None if occupancy_map is None else self.diagram.GetSubsystemByName("amcl")
         self._plant = self.diagram.GetSubsystemByName("plant")
@@ -318,11 +314,10 @@ class NavigationRun(SimulationRun):
     def finish(self) -> NavigationReport:
         """Closes the ROS 2 log (if any: ``NAME.partial.mcap`` unless ``log_complete``, with
         the live SLAM's final map when it has one) and returns the report."""
-        slam = "slam"
         final_map = None
-        if self._log is not None and self.diagram.HasSubsystemNamed(slam):
-            system = self.diagram.GetSubsystemByName(slam)
-            final_map = system.slam(system.GetMyContextFromRoot(self.context)).map()
+        if self._log is not None and self.diagram.HasSubsystemNamed("slam"):
+            slam = self.diagram.GetSubsystemByName("slam")
+            final_map = slam.slam(slam.GetMyContextFromRoot(self.context)).map()
         close_ros_log(
             self._log,
             complete=self.log_complete(),

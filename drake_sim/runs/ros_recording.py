@@ -6,6 +6,7 @@ The log appears at ``FILE.mcap`` when the run is complete; a run stopped or fail
 end writes ``FILE.partial.mcap`` instead, and a log already at ``FILE.mcap`` stays as it was.
 """
 
+import contextlib
 from pathlib import Path
 
 from drake_sim.base import cli
@@ -38,6 +39,17 @@ def open_ros_log(options) -> McapLogWriter | None:
     return McapLogWriter(path) if path else None
 
 
+@contextlib.contextmanager
+def dropped_on_error(writer: McapLogWriter | None):
+    """Within the block (a run's set-up), an error drops the log ``writer`` opened for it."""
+    try:
+        yield
+    except BaseException:
+        if writer is not None:
+            writer.abort()
+        raise
+
+
 def partial_path(path: Path) -> Path:
     """Where an incomplete run's log goes: ``NAME.partial.mcap`` beside ``NAME.mcap``."""
     return path.with_name(f"{path.stem}.partial{path.suffix}")
@@ -49,7 +61,6 @@ def close_ros_log(
     complete: bool,
     seconds: float,
     final_map: OccupancyMap | None = None,
-    frame: str = "map",
 ) -> Path | None:
     """Ends the log, with ``final_map`` as its last ``/map`` (at ``seconds``), at its path when
     the run is ``complete`` (else ``partial_path``), and says where it went; None without one.
@@ -60,7 +71,7 @@ def close_ros_log(
     if writer is None:
         return None
     if final_map is not None and final_map.cells.size:
-        writer.write("/map", map_message(final_map, seconds, frame), seconds, latched=True)
+        writer.write("/map", map_message(final_map, seconds), seconds, latched=True)
     path = writer.close(writer.path if complete else partial_path(writer.path))
     kept = "" if complete or not writer.path.exists() else f"; {writer.path} is kept as it was"
     print(f"ROS 2 log: {path} ({writer.messages} messages){kept}", flush=True)

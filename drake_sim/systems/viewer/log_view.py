@@ -13,11 +13,16 @@ rate.
 import numpy as np
 from pydrake.geometry import Cylinder, Meshcat, Rgba
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.perception import BaseField, Fields, PointCloud
 
 from drake_sim.systems.estimation.loop_closure import scan_points
 from drake_sim.systems.estimation.scan_matcher import transform_points
-from drake_sim.systems.viewer.map_view import ESTIMATE_COLOR, MAP_HEIGHT, SCAN_COLOR, map_mesh
+from drake_sim.systems.viewer.map_view import (
+    ESTIMATE_COLOR,
+    MAP_HEIGHT,
+    SCAN_COLOR,
+    map_mesh,
+    point_cloud,
+)
 
 TRAIL_COLOR = Rgba(0.1, 0.4, 1.0, 1.0)
 ROOT = "/log"
@@ -84,8 +89,7 @@ class LogView:
         if not len(points):
             self._meshcat.Delete(f"{ROOT}/scan")
             return
-        cloud = PointCloud(len(points), Fields(BaseField.kXYZs))
-        cloud.mutable_xyzs()[:] = np.vstack([points.T, np.full(len(points), 3 * MAP_HEIGHT)])
+        cloud = point_cloud(points, 3 * MAP_HEIGHT)
         self._meshcat.SetObject(f"{ROOT}/scan", cloud, point_size=0.06, rgba=SCAN_COLOR)
 
     def _draw_trail(self, xy: np.ndarray) -> None:

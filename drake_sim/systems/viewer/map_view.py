@@ -45,6 +45,13 @@ def map_mesh(
     return vertices, np.ascontiguousarray(faces, dtype=np.int32), np.ascontiguousarray(colors)
 
 
+def point_cloud(xy: np.ndarray, height: float) -> PointCloud:
+    """A ``PointCloud`` of the (n, 2) world points ``xy`` at ``height`` (m), for Meshcat."""
+    cloud = PointCloud(len(xy), Fields(BaseField.kXYZs))
+    cloud.mutable_xyzs()[:] = np.vstack([np.asarray(xy).T, np.full(len(xy), height)])
+    return cloud
+
+
 class MapView(LeafSystem):
     """Draws the SLAM map every ``map_period`` s, and the last scan (as seen from the estimated
     pose) and an arrow at the estimated pose every ``scan_period`` s from ``scan_offset`` (set
@@ -117,15 +124,13 @@ class MapView(LeafSystem):
         x, y, yaw = self._X_base_sensor
         sensor = np.array([pose[0] + c * x - s * y, pose[1] + s * x + c * y, pose[2] + yaw])
         cs, ss = np.cos(sensor[2]), np.sin(sensor[2])
-        world = np.vstack(
+        world = np.column_stack(
             [
                 sensor[0] + cs * points[:, 0] - ss * points[:, 1],
                 sensor[1] + ss * points[:, 0] + cs * points[:, 1],
-                np.full(len(points), self._scan_height),
             ]
         )
-        cloud = PointCloud(len(points), Fields(BaseField.kXYZs))
-        cloud.mutable_xyzs()[:] = world
+        cloud = point_cloud(world, self._scan_height)
         self._put("scan", cloud, 0.04, SCAN_COLOR, context.get_time())
 
     def _put(self, name: str, shape, point_size: float | None, rgba, time: float) -> None:
