@@ -127,6 +127,16 @@ ROOM_ROUTE = [
 ROOM_START = (-3.2, -2.3, 0.0)
 
 
+def doorways():
+    """A corridor 1.2 m wide whose walls have a 0.9 m doorway every 3 m, rooms behind them:
+    every surface faces across it, but the jambs are depth steps along it."""
+    walls = [
+        box(x + 1.05, side * 0.65, 2.1, 0.1) for x in np.arange(-15.0, 15.0, 3.0)
+        for side in (-1, 1)
+    ]  # fmt: skip
+    return World(15.0, 3.0, polygons=walls)
+
+
 def drive(waypoints, start, *, speed=0.2, turn_rate=0.8, rate=5.0):
     """Truth poses (k, 3) of a robot that turns on the spot towards each waypoint then drives
     straight to it, sampled at ``rate`` Hz."""

@@ -14,9 +14,9 @@ feeds scan by scan, as slam_toolbox and Cartographer do from a bag.
 * **Bags** (ROS 1 ``.bag``; ROS 2 folders or files, sqlite3 or MCAP), read with ``rosbags``
   (pure Python): the ``sensor_msgs/LaserScan`` topic and the odometry (a ``nav_msgs/Odometry``
   topic, else the ``tf`` transform to the scan's base frame) are found by type unless named.
-  A scan takes the latest odometry before it in the bag's order (a log's stamps may run
-  backwards, the order of recording does not). The sensor's pose on the base comes from the
-  bag's ``tf_static`` (or ``tf``), if it has it.
+  A scan takes the latest odometry before it in the bag's order (a ROS 1 bag's written order:
+  a log's stamps may run backwards, the order of recording does not; ``laser_bags``). The
+  sensor's pose on the base comes from the bag's ``tf_static`` (or ``tf``), if it has it.
 
 Ranges are as logged, with every reading at or beyond the scan's maximum (SICK's "no echo",
 81.9 m) or not finite set to ``inf``: no return, which a mapper must not draw as an obstacle.

@@ -288,6 +288,19 @@ def normal_spread(points: np.ndarray, *, k: int = 3, max_gap: float = 0.5):
     return np.linalg.eigh(normal.T @ normal / len(normal))
 
 
+def depth_edges(points: np.ndarray, *, jump: float = 0.3, ratio: float = 3.0) -> int:
+    """How many depth discontinuities a scan has: steps in range between consecutive end points
+    (sensor frame, beam order) longer than ``jump`` m and ``ratio`` times the steps beside them
+    (a wall seen at a grazing angle steps far but evenly). A door's jamb, a pillar, the end of a
+    wall: each fixes the position along a corridor whose surfaces' normals all face across it.
+    """
+    if len(points) < 2:
+        return 0
+    steps = np.abs(np.diff(np.hypot(points[:, 0], points[:, 1])))
+    beside = np.maximum(np.r_[0.0, steps[:-1]], np.r_[steps[1:], 0.0])
+    return int(np.count_nonzero(steps > np.maximum(jump, ratio * beside)))
+
+
 def transform_points(pose, points: np.ndarray) -> np.ndarray:
     """Points (n, 2) of a frame at ``pose`` (x, y, yaw) expressed in the world, m."""
     c, s = math.cos(pose[2]), math.sin(pose[2])

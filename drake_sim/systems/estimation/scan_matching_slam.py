@@ -6,7 +6,8 @@ prediction (``scan_matcher.match_scan``, coarse to fine, a weak prior towards th
 and keep the match unless it strays from the prediction by more than the gate
 (``max_correction`` m, ``max_correction_deg``) or scores too low, in which case the prediction
 stands (odometry bridges a bad scan). Where the scan's surfaces all face one way (a corridor,
-``scan_matcher.normal_spread``), the position along them is the prediction's. The map (one
+``scan_matcher.normal_spread``) and it has no depth steps along them (no door jambs:
+``scan_matcher.depth_edges``), the position along them is the prediction's. The map (one
 ``LogOddsGrid`` per pyramid level, as in hector_slam) takes the scan only when the robot has
 moved ``map_update_distance`` or turned ``map_update_angle_deg`` since the last map update,
 and always for the first scans: updating with every scan writes each scan's small errors into
@@ -52,6 +53,7 @@ from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 from drake_sim.systems.estimation.scan_matcher import (
     MatchMap,
     MatchResult,
+    depth_edges,
     match_scan,
     normal_spread,
     surface_normals,
@@ -229,6 +231,8 @@ class ScanMatchingSlam:
                 self.rejected += 1
                 return prediction
             self.recovered += 1
+        if depth_edges(sensor_points) >= config.degenerate_edges:
+            return result.pose
         return self._remap(result.pose, prediction, points)
 
     def _gated_match(self, points, directions, prediction) -> MatchResult | None:

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drake_sim.base import laser_bags as mut
 from drake_sim.base import ros_messages as rm
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.laser_logs import read_log
@@ -118,6 +119,32 @@ def test_a_bag_reads_its_scans_with_the_odometry_before_each(tmp_path, writer):
     np.testing.assert_allclose(first.odometry, [0.5, 0.0, 0.2], atol=1e-9)
     np.testing.assert_allclose(second.odometry, [0.5, 0.0, 0.2], atol=1e-9)  # not /odom_other
     np.testing.assert_allclose(log.laser_pose, [0.1, 0.0, 0.0], atol=1e-9)
+
+
+def test_a_ros1_bag_is_read_in_the_order_it_was_written(tmp_path):
+    # Stamps that run backwards (Intel's do): the odometry written just before a scan is its
+    # odometry, and the scans keep the written order, whatever their stamps say.
+    items = [
+        ("/odom", "nav_msgs/msg/Odometry", 2.0, _odom(2.0, 1.0, 0.0, 0.0)),
+        ("/scan", "sensor_msgs/msg/LaserScan", 1.5, _scan(1.5, [1.0, 2.0, 3.0])),
+        ("/odom", "nav_msgs/msg/Odometry", 1.0, _odom(1.0, 2.0, 0.0, 0.0)),
+        ("/scan", "sensor_msgs/msg/LaserScan", 1.2, _scan(1.2, [1.0, 2.0, 3.0])),
+    ]
+    log = read_log(_write_ros1(tmp_path / "backwards.bag", items))
+    assert [s.time for s in log.scans] == pytest.approx([1.5, 1.2])
+    assert [s.odometry[0] for s in log.scans] == pytest.approx([1.0, 2.0])
+
+
+def test_an_unreadable_record_is_a_config_error(tmp_path, monkeypatch):
+    path = _write_ros1(tmp_path / "run.bag", _messages())
+
+    def broken(reader, connections):
+        raise EOFError("short read")
+        yield
+
+    monkeypatch.setattr(mut, "_records", broken)
+    with pytest.raises(ConfigError, match=r"run.bag: the bag's records cannot be read \(short"):
+        read_log(path)
 
 
 def test_without_an_odometry_topic_the_tf_to_the_base_is_read(tmp_path):

@@ -146,6 +146,15 @@ def test_normal_spread_tells_a_corridor_from_a_room():
     assert mut.normal_spread(np.zeros((3, 2)))[0].tolist() == [0.0, 0.0]
 
 
+def test_depth_edges_are_steps_not_grazing_walls():
+    pose = (0.3, 0.1, 0.0)
+    assert mut.depth_edges(end_points(corridor(), pose)) == 0  # walls at grazing angles too
+    assert mut.depth_edges(end_points(helpers.doorways(), pose)) >= 4
+    values, _ = mut.normal_spread(end_points(helpers.doorways(), pose))
+    assert values[0] < 0.05 * values[1]  # the normals alone call it a corridor
+    assert mut.depth_edges(np.zeros((1, 2))) == 0
+
+
 def test_unknown_cells_do_not_weigh():
     values = np.full((10, 10), 0.2)
     known = np.zeros((10, 10), bool)

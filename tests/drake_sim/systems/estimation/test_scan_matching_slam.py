@@ -129,6 +129,22 @@ def test_a_featureless_corridor_falls_back_on_odometry_along_it():
     assert dut.degenerate >= 0.9 * dut.scans
 
 
+def test_a_corridor_with_doorways_is_matched_along_it():
+    # Its surfaces all face across it, as in the featureless one, but the jambs are depth
+    # steps (``depth_edges``): the scan, not the odometry (3 % too long), says how far it went.
+    world = helpers.doorways()
+    route = [(4.0, 0.0)]
+    dut, truth, odom = run(world, route, (-4.0, 0.0, 0.0), seed=3, scale=0.03, yaw_deg_per_m=1.0)
+    estimate = dut.trajectory
+    odometry_along = math.hypot(*(odom[-1, :2] - odom[0, :2]))
+    assert odometry_along - 8.0 > 0.2
+    error = np.hypot(*(estimate[:, :2] - truth[:, :2]).T)
+    # The young map holds the first scans back (0.15 m), then the jambs take over (0.04 to
+    # 0.07 m at the end over seeds 3 to 7; following the odometry ends 0.25 m off).
+    assert error[-20:].max() < 0.08 and error.max() < 0.2, (error[-20:].max(), error.max())
+    assert dut.degenerate <= 0.1 * dut.scans
+
+
 def test_a_match_beyond_the_gate_keeps_the_prediction():
     world = helpers.room()
     pose = np.array([-2.0, -2.0, 0.3])
