@@ -158,16 +158,17 @@ SECTIONS = (
     Section(
         "slam_logs",
         "SLAM on real logs",
-        _script("slam_logs"),
+        _script("slam_logs", "--noise-runs", "10", "--jobs", "2"),
         "Offline SLAM (the mapping app with `--log FILE`) on the classic real 2D laser logs of "
         "Kümmerle et al. 2009 (Intel, Freiburg 079 and ACES from their ROS 1 bags with "
         "GMapping's beam angles, MIT CSAIL from its CARMEN log), the mapping scenario's SLAM "
         "defaults with the pose graph and loop closures the log mode turns on; errors of the "
         "laser's trajectory (the frame the relations are in: Freiburg 079's laser is 4 cm "
         "ahead of its base, the others' at it) on each log's ground-truth relations, with "
-        "GMapping's, graph mapping's and Cartographer's published translational errors beside. "
-        "Needs the logs (`shared/benchmarks/slam_carmen` beside the checkout, or "
-        "`$DRAKE_SIM_SLAM_LOGS`).",
+        "GMapping's, graph mapping's and Cartographer's published translational errors "
+        "beside; then each log ten times more with seeded 1 mm noise on its ranges (two at a "
+        "time): the least and most error over them. Needs the logs "
+        "(`shared/benchmarks/slam_carmen` beside the checkout, or `$DRAKE_SIM_SLAM_LOGS`).",
     ),
     Section(
         "amcl",
