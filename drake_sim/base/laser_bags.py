@@ -12,7 +12,8 @@ A ROS 1 bag is read in the order its messages were written, not sorted by their 
 stamps may run backwards (Intel's do in hundreds of places, odometry and scans alike), and the
 order of writing is the order of events, so each scan is paired with the odometry written just
 before it. (Sorted by stamp, Intel's bag paired some scans with odometry 0.2 to 0.4 m old.)
-ROS 2 bags and ``.mcap`` files are read in their stamps' order.
+A lone ``.mcap`` file is read in its written order too; a rosbag2 folder in the order of its
+log times (when each message was recorded, not its header's stamp), as ``rosbags`` gives it.
 """
 
 import io
