@@ -173,15 +173,16 @@ def main() -> None:
         _print(row)
         rows.append(row)
     tasks = [(name, seed) for name in present for seed in range(args.noise_runs)]
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [
-            pool.submit(run_one, data, name, args.limit, noise_seed=seed, **options)
-            for name, seed in tasks
-        ]
-        runs = {}
-        for (name, seed), future in zip(tasks, futures, strict=True):
-            runs.setdefault(name, []).append(future.result())
-            _print(runs[name][-1], f"  noise seed {seed}")
+    runs = {}
+    if tasks:  # no worker processes without noise runs
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            futures = [
+                pool.submit(run_one, data, name, args.limit, noise_seed=seed, **options)
+                for name, seed in tasks
+            ]
+            for (name, seed), future in zip(tasks, futures, strict=True):
+                runs.setdefault(name, []).append(future.result())
+                _print(runs[name][-1], f"  noise seed {seed}")
     for row in rows:
         noisy = runs.get(row["log"], [])
         if noisy:

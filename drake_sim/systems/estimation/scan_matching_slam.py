@@ -231,9 +231,7 @@ class ScanMatchingSlam:
                 self.rejected += 1
                 return prediction
             self.recovered += 1
-        if depth_edges(sensor_points) >= config.degenerate_edges:
-            return result.pose
-        return self._remap(result.pose, prediction, points)
+        return self._remap(result.pose, prediction, points, sensor_points)
 
     def _gated_match(self, points, directions, prediction) -> MatchResult | None:
         """The match from ``prediction``, or None when the gate rejects it."""
@@ -282,10 +280,14 @@ class ScanMatchingSlam:
             return None
         return self._gated_match(points, directions, found.pose)
 
-    def _remap(self, pose, prediction, points) -> np.ndarray:
-        """``pose``, with the prediction's position along a direction the scan cannot see."""
+    def _remap(self, pose, prediction, points, sensor_points) -> np.ndarray:
+        """``pose``, with the prediction's position along a direction the scan cannot see: its
+        surfaces' normals (``points``, base frame) all face across it, and it has no depth
+        steps along it (``sensor_points``, the same in the sensor frame)."""
         values, vectors = normal_spread(points)
         if values[1] > 0 and values[0] >= self.config.degenerate_ratio * values[1]:
+            return pose
+        if depth_edges(sensor_points) >= self.config.degenerate_edges:
             return pose
         self.degenerate += 1
         c, s = math.cos(pose[2]), math.sin(pose[2])
