@@ -128,6 +128,32 @@ def search(
     return SearchResult(pose, float(score))
 
 
+def ambiguous(
+    table: SearchTable, points, pose, score: float, *, distance: float, max_ratio: float,
+    yaw_step: float,
+) -> bool:  # fmt: skip
+    """Whether a pose between ``distance`` and three times that from ``pose``, along either of
+    the ``points``' principal axes, scores above ``max_ratio`` times ``score``: four small
+    searches, each in a square window (half side ``distance`` / sqrt 2, so that no pose of it
+    is nearer than that) centred twice that distance away, with yaws ``yaw_step`` either side.
+    A corridor seen end-on matches along its length: a pose found there is a guess."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    centred = points - points.mean(0)
+    _, vectors = np.linalg.eigh(centred.T @ centred)
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    for direction in (np.array([[c, -s], [s, c]]) @ vectors).T:  # the axes, in the world
+        for sign in (-1.0, 1.0):
+            centre = np.array(pose, dtype=float)
+            centre[:2] += sign * 2.0 * distance * direction
+            other = search(
+                table, points, centre, window_xy=distance / math.sqrt(2.0), window_yaw=yaw_step,
+                yaw_step=yaw_step,
+            )  # fmt: skip
+            if other.score > max_ratio * score:
+                return True
+    return False
+
+
 @numba.njit(cache=True)
 def _cells(origin_x, origin_y, resolution, points, x, y, yaw):
     """Integer cells (column, row) of the points placed at (x, y, yaw)."""

@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from drake_sim.base.errors import ConfigError
-from drake_sim.systems.estimation.correlative_search import make_table, search
+from drake_sim.systems.estimation.correlative_search import ambiguous, make_table, search
 from drake_sim.systems.estimation.scan_matcher import MatchMap, match_scan, transform_points
 
 
@@ -168,38 +168,14 @@ def close_loop(
     pose, score = refined.pose, float(refined.scores[0])
     if score < found.score:
         pose, score = found.pose, found.score
-    if score < config.min_score or _ambiguous(table, scan, pose, score, config):
+    if score < config.min_score or ambiguous(
+        table,
+        scan,
+        pose,
+        score,
+        distance=config.ambiguity_distance,
+        max_ratio=config.max_ambiguity,
+        yaw_step=math.radians(config.yaw_step_deg),
+    ):
         return None
     return pose, score
-
-
-def _ambiguous(table, scan, pose, score, config: LoopClosureConfig) -> bool:
-    """Whether a pose between ``ambiguity_distance`` and three times that from ``pose``, along
-    either of the scan's principal axes, scores nearly as well: four small searches, each in a
-    square window (half side ``ambiguity_distance`` / sqrt 2, so that no pose of it is nearer
-    than that) centred twice that distance away."""
-    distance = config.ambiguity_distance
-    for direction in _directions(scan, pose):
-        for sign in (-1.0, 1.0):
-            centre = pose.copy()
-            centre[:2] += sign * 2.0 * distance * direction
-            other = search(
-                table,
-                scan,
-                centre,
-                window_xy=distance / math.sqrt(2.0),
-                window_yaw=math.radians(config.yaw_step_deg),
-                yaw_step=math.radians(config.yaw_step_deg),
-            )
-            if other.score > config.max_ambiguity * score:
-                return True
-    return False
-
-
-def _directions(scan, pose) -> list[np.ndarray]:
-    """The world x and y axes turned onto the scan's principal axes (two unit vectors)."""
-    centred = scan - scan.mean(0)
-    _, vectors = np.linalg.eigh(centred.T @ centred)
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    rotation = np.array([[c, -s], [s, c]])
-    return [rotation @ vectors[:, 0], rotation @ vectors[:, 1]]

@@ -47,7 +47,12 @@ import numpy as np
 
 from drake_sim.base.map_files import OccupancyMap, save_map
 from drake_sim.base.planar import compose, relative_pose
-from drake_sim.systems.estimation.correlative_search import make_table, occupied_points, search
+from drake_sim.systems.estimation.correlative_search import (
+    ambiguous,
+    make_table,
+    occupied_points,
+    search,
+)
 from drake_sim.systems.estimation.match_updates import update_level
 from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
 from drake_sim.systems.estimation.scan_matcher import (
@@ -257,7 +262,9 @@ class ScanMatchingSlam:
 
     def _recover(self, points, directions, prediction) -> MatchResult | None:
         """After a rejected match: the exhaustive search's best pose within the recovery window
-        (``SlamConfig.recovery_window``), matched and gated from there; None if there is none."""
+        (``SlamConfig.recovery_window``), matched and gated from there; None if there is none
+        or another pose as far off as a loop closure's runner-up scores nearly as well
+        (``correlative_search.ambiguous`` with the loop closures' settings)."""
         config = self.config
         window, turn = config.recovery_window, math.radians(config.recovery_window_deg)
         if window <= 0:
@@ -276,7 +283,11 @@ class ScanMatchingSlam:
             table, points, prediction, window_xy=window, window_yaw=turn,
             yaw_step=math.radians(0.5),
         )  # fmt: skip
-        if found.score < config.recovery_min_score:
+        closure = config.loop_closure
+        if found.score < config.recovery_min_score or ambiguous(
+            table, points, found.pose, found.score, distance=closure.ambiguity_distance,
+            max_ratio=closure.max_ambiguity, yaw_step=math.radians(0.5),
+        ):  # fmt: skip
             return None
         return self._gated_match(points, directions, found.pose)
 

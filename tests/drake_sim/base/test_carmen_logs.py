@@ -50,3 +50,23 @@ def test_a_malformed_laser_line_is_named(tmp_path, line):
     path.write_text(lh.flaser_line([1.0, 2.0], [0, 0, 0], 1.0) + "\n" + line + "\n")
     with pytest.raises(ConfigError, match=r"bad.log:2: a malformed FLASER line"):
         mut.read_carmen(path)
+
+
+def test_a_log_whose_largest_reading_recurs_takes_it_for_no_echo(tmp_path):
+    """ACES's scanner logs 50.00 m where nothing returned: so often that it is no surface."""
+    rng = np.random.default_rng(0)
+    lines = []
+    for k in range(200):
+        ranges = np.round(rng.uniform(0.5, 49.9, 180), 2)
+        ranges[k % 7 :: 90] = 50.0  # two beams a scan see nothing
+        lines.append(lh.flaser_line(ranges, [0.1 * k, 0.0, 0.0], 1.0 + 0.2 * k))
+    path = tmp_path / "aces.clf"
+    path.write_text("\n".join(lines) + "\n")
+    log = mut.read_carmen(path)
+    first = log.scans[0]
+    assert np.isinf(first.ranges[0::90]).all() and np.isfinite(first.ranges).sum() == 178
+    assert first.range_max == 50.0 and first.ranges[np.isfinite(first.ranges)].max() < 50.0
+    # ...but not a reading that a few beams share: the 81.91 m rule alone applies.
+    few = tmp_path / "few.clf"
+    few.write_text("\n".join(lines[:2]) + "\n")
+    assert np.isfinite(mut.read_carmen(few).scans[0].ranges).all()

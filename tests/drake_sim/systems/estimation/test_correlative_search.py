@@ -101,3 +101,24 @@ def test_occupied_points_are_the_centres_of_positive_cells_in_the_box():
     inside = mut.occupied_points(log_odds, 0.5, (10.0, 20.0), (10.9, 20.4), (11.6, 21.1))
     np.testing.assert_allclose(inside, [[11.25, 20.75]])
     assert mut.occupied_points(log_odds, 0.5, (10.0, 20.0), (0.0, 0.0), (5.0, 5.0)).shape == (0, 2)
+
+
+def test_a_pose_along_a_corridor_is_ambiguous_and_one_in_a_room_is_not():
+    resolution = 0.05
+    room = room_outline()
+    pose = np.array([4.0, 3.0, 0.3])
+    t = np.arange(-10.0, 10.0, 0.02)
+    corridor = np.concatenate([np.stack([t, 0 * t - 0.6], 1), np.stack([t, 0 * t + 0.6], 1)])
+    for walls, expected in [(room, False), (corridor, True)]:
+        table = mut.make_table(walls, resolution, sigma=1.5 * resolution, margin=1.5)
+        at = pose if walls is room else np.array([0.0, 0.0, 1.2])
+        scan = transform_points(relative_pose(at, np.zeros(3)), walls[::4])
+        scan = scan[np.hypot(*scan.T) < 4.0]  # what a short-range lidar sees
+        found = mut.search(
+            table, scan, at, window_xy=0.1, window_yaw=math.radians(2), yaw_step=math.radians(0.5)
+        )
+        result = mut.ambiguous(
+            table, scan, found.pose, found.score, distance=0.3, max_ratio=0.9,
+            yaw_step=math.radians(0.5),
+        )  # fmt: skip
+        assert result is expected, walls is room
