@@ -171,6 +171,17 @@ SECTIONS = (
         "(`shared/benchmarks/slam_carmen` beside the checkout, or `$DRAKE_SIM_SLAM_LOGS`).",
     ),
     Section(
+        "slam_carmen",
+        "SLAM on real logs, from CARMEN files",
+        _script("slam_logs", "--carmen"),
+        "The same logs as CARMEN users have them: each bag written as a CARMEN log of FLASER "
+        "lines (ranges in centimetres, the scanner's maximum where nothing came back, no laser "
+        "offset: the datasets' `.clf` files are not in `shared/`, and this is their format) in "
+        "a temporary folder, then mapped from that file as `mapping --log FILE.clf` maps it; "
+        "MIT CSAIL from its own CARMEN log. The laser is the base here, so the trajectory "
+        "scored is the one `--trajectory` writes.",
+    ),
+    Section(
         "amcl",
         "AMCL",
         _script("amcl", "--seeds", "3"),

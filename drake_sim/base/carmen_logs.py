@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_sim.base.errors import ConfigError
+from drake_sim.base.files import write_atomic
 from drake_sim.base.laser_scans import LaserLog, LaserScanRecord, gmapping_angles, no_echo_to_inf
 from drake_sim.base.planar import relative_pose
 
@@ -51,6 +52,33 @@ def read_carmen(path: Path | str, *, range_max: float = 81.0) -> LaserLog:
         kinds.add(fields[0])
     kind = "/".join(sorted(kinds)) or "FLASER"
     return LaserLog(path, _no_echo_at_the_maximum(scans), laser_pose, kind, kind)
+
+
+def write_flaser(log: LaserLog, path: Path | str) -> Path:
+    """Writes ``log`` as a CARMEN log of ``FLASER`` lines, as the Kümmerle datasets' ``.clf``
+    files are (atomically): ranges in centimetres, no return as the scan's ``range_max``, the
+    odometry as both poses (a scan with none before it takes the first the log has), the time
+    with its microseconds. ``read_carmen`` reads it back, the ranges to the centimetre.
+
+    Raises:
+        ConfigError: a scan's beams are not at GMapping's angles (a ``FLASER`` line cannot
+            carry others), or no scan has odometry.
+    """
+    first = next((s.odometry for s in log.scans if s.odometry is not None), None)
+    if first is None:
+        raise ConfigError(f"{path}: a FLASER line needs odometry, and the log has none")
+    lines = ["# FLASER num_readings [range_readings] x y theta odom_x odom_y odom_theta "
+             "ipc_timestamp ipc_hostname logger_timestamp"]  # fmt: skip
+    for scan in log.scans:
+        count = len(scan.ranges)
+        if count < 2 or not np.allclose(scan.angles, gmapping_angles(count), atol=1e-6):
+            raise ConfigError(f"{path}: the scan at {scan.time} s is not at GMapping's angles")
+        ranges = np.where(np.isfinite(scan.ranges), scan.ranges, scan.range_max)
+        pose = " ".join(f"{v:.6f}" for v in (first if scan.odometry is None else scan.odometry))
+        values = " ".join(f"{v:.2f}" for v in ranges)
+        stamp = f"{scan.time:.6f}"
+        lines.append(f"FLASER {count} {values} {pose} {pose} {stamp} drake_sim {stamp}")
+    return write_atomic(path, "\n".join(lines) + "\n", "CARMEN log")
 
 
 def _no_echo_at_the_maximum(scans: list[LaserScanRecord]) -> list[LaserScanRecord]:

@@ -1,5 +1,6 @@
 """CARMEN logs as LaserLog: FLASER and ROBOTLASER1 lines, file order, malformed lines named."""
 
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -70,3 +71,30 @@ def test_a_log_whose_largest_reading_recurs_takes_it_for_no_echo(tmp_path):
     few = tmp_path / "few.clf"
     few.write_text("\n".join(lines[:2]) + "\n")
     assert np.isfinite(mut.read_carmen(few).scans[0].ranges).all()
+
+
+def test_a_log_written_as_flaser_lines_reads_back_to_the_centimetre(tmp_path):
+    from drake_sim.base.laser_scans import LaserLog, LaserScanRecord
+
+    rng = np.random.default_rng(1)
+    scans = []
+    for k in range(3):
+        ranges = rng.uniform(0.2, 20.0, 181)
+        ranges[5 + k] = np.inf
+        odometry = None if k == 0 else np.array([0.1 * k, -0.2, 0.3 * k])
+        scans.append(
+            LaserScanRecord(10.0 + k * 0.123457, ranges, gmapping_angles(181), 0.0, 81.91, odometry)
+        )
+    log = LaserLog(tmp_path / "in.bag", scans, np.zeros(3), "/scan", "/odom")
+    back = mut.read_carmen(mut.write_flaser(log, tmp_path / "out.clf"))
+    assert [s.time for s in back.scans] == [s.time for s in scans]
+    for original, read in zip(scans, back.scans, strict=True):
+        finite = np.isfinite(original.ranges)
+        np.testing.assert_array_equal(np.isfinite(read.ranges), finite)
+        np.testing.assert_allclose(read.ranges[finite], original.ranges[finite], atol=0.005)
+        np.testing.assert_allclose(read.angles, original.angles)
+    np.testing.assert_allclose(back.scans[0].odometry, scans[1].odometry)  # the first there is
+    np.testing.assert_allclose(back.scans[2].odometry, scans[2].odometry)
+    other = dc.replace(log, scans=[dc.replace(scans[1], angles=np.linspace(-1, 1, 181))])
+    with pytest.raises(ConfigError, match="not at GMapping's angles"):
+        mut.write_flaser(other, tmp_path / "other.clf")
