@@ -53,15 +53,15 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   (about the old estimate), which keeps its spread, weights and covariance and lets the next
   update start from the refined pose; without it, the particles stay where the filter put
   them and a rejected match leaves the filter's bias (measured in the warehouse, navigation to
-  10 goals: worst goal 2.1 cm with the shift, 2.6 to 5.3 cm without). Where a scan has too
-  few beams in range to match (``refinement_min_points``: open floor, nothing within the
-  lidar's reach), the filter alone is a wide cloud that the no-return beams cut on one side,
-  which moves its mean though not the truth (nav2's warehouse: 0.24 m off at a goal where
-  the wheel odometry alone was 2.5 cm off). With ``refinement_blind_odometry`` the estimate
-  is then the last matched pose carried by the odometry since, until a scan matches again (a
-  rejected match ends it). The particles stay the filter's: moved with the carried pose, they
-  came out of 7.5 m of blind travel where the odometry had drifted, and the first matches
-  after it settled 6.5 cm off (the filter's own cloud: 2 cm).
+  10 goals: worst goal 2.1 cm with the shift, 2.6 to 5.3 cm without). Where a scan has no
+  beam in range at all (open floor, nothing within the lidar's reach), the filter has only the
+  no-return beams, which cut its wide cloud on one side and so move its mean though not the
+  truth (nav2's warehouse: 0.24 m off at a goal where the wheel odometry alone was 2.5 cm off).
+  With ``refinement_blind_odometry`` the estimate is then the last matched pose carried by the
+  odometry since; a scan with a few returns (too few to match) gives the filter's own estimate
+  again, and a rejected match ends the carrying. The particles stay the filter's: moved with
+  the carried pose, they came out of 7.5 m of blind travel where the odometry had drifted and
+  the first matches after it settled 6.5 cm off (the filter's own cloud: 2 cm).
 
 Global localisation on a large map (ours): ``global_localization_density`` particles per m^2
 of free space (nav2's depot: 90,000), weighed by the first update and resampled to
@@ -316,11 +316,15 @@ class ParticleFilter:
             self.last_match = match
         if new_pose is None:
             self.refinements[1] += 1
-            if match is None and self._fix is not None and self.config.refinement_blind_odometry:
+            if match is not None:
+                self._fix = None
+            elif (
+                self._fix is not None
+                and self.config.refinement_blind_odometry
+                and _blind(self.config, *scan)
+            ):
                 fix_pose, fix_odom = self._fix  # the particles stay the filter's
                 self._estimate = (compose(fix_pose, relative_pose(fix_odom, odom)), covariance)
-            else:
-                self._fix = None
             return
         self.refinements[0] += 1
         self._fix = (new_pose, odom.copy())
@@ -374,3 +378,12 @@ class ParticleFilter:
         y = y0 + s0 * local[:, 0] + c0 * local[:, 1]
         yaw = self._rng.uniform(-math.pi, math.pi, count)
         return np.stack([x, y, yaw], -1)
+
+
+def _blind(config: AmclConfig, ranges, angles, range_max, range_min, sensor) -> bool:
+    """Whether no beam of the scan returned within the filter's range limits."""
+    if config.laser_max_range > 0:
+        range_max = min(range_max, config.laser_max_range)
+    if config.laser_min_range > 0:
+        range_min = max(range_min, config.laser_min_range)
+    return not np.any(np.isfinite(ranges) & (ranges < range_max) & (ranges > range_min))

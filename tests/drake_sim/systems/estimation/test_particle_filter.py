@@ -379,6 +379,13 @@ def test_a_scan_too_blind_to_match_carries_the_last_match_by_the_odometry():
     np.testing.assert_allclose(runs[True][0], carried, atol=1e-12)
     assert math.dist(runs[False][0][:2], carried[:2]) > 1e-4  # the cloud's mean: motion noise
     np.testing.assert_allclose(runs[True][1], runs[False][1])  # the particles: the filter's
+    # A few returns (too few to match, enough for the filter's own model): the filter's mean.
+    few = scan_at(world("room")[1], moved, np.random.default_rng(2))
+    few[np.arange(len(few)) % 60 != 0] = np.inf
+    assert 0 < np.isfinite(few).sum() < REFINED.refinement_min_points
+    dut = one_update("room", REFINED, truth, offset)
+    dut.update(moved, few, ANGLES, range_max=RANGE_MAX, range_min=RANGE_MIN, X_base_sensor=SENSOR)
+    assert dut.refinements == [1, 1] and math.dist(dut.estimate()[0][:2], carried[:2]) > 1e-4
     # The next scan that sees the room is matched again, from the carried pose.
     then = compose(moved, (0.3, 0.0, 0.0))
     scan = scan_at(world("room")[1], then, np.random.default_rng(1))
