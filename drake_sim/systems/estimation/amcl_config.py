@@ -91,8 +91,8 @@ class AmclConfig:
     # position (``scan_matcher.normal_spread``), [0, 1].
     refinement_degenerate_ratio: float = 0.05
     refinement_shift_particles: bool = True  # Move the particles with the correction too.
-    # While scans have no beam in range at all (open floor), the estimate is the last matched
-    # pose carried by the odometry since (``particle_filter``'s notes).
+    # With the refinement on: while scans have no beam in range at all (open floor), the
+    # estimate is the last matched pose carried by the odometry since (``particle_filter``).
     refinement_blind_odometry: bool = True
 
     def initial_pose(self) -> np.ndarray:

@@ -59,9 +59,10 @@ loop over particles x beams is one compiled numba kernel, cached on disk):
   truth (nav2's warehouse: 0.24 m off at a goal where the wheel odometry alone was 2.5 cm off).
   With ``refinement_blind_odometry`` the estimate is then the last matched pose carried by the
   odometry since; a scan with a few returns (too few to match) gives the filter's own estimate
-  again, and a rejected match ends the carrying. The particles stay the filter's: moved with
-  the carried pose, they came out of 7.5 m of blind travel where the odometry had drifted and
-  the first matches after it settled 6.5 cm off (the filter's own cloud: 2 cm).
+  again, and a rejected match ends the carrying. The particles stay the filter's (moved with
+  the carried pose they were no better: after 7.5 m of blind travel in nav2's warehouse the
+  first matches settled 6.5 cm off). Goals across open floor still end 1 to 7 cm off in single
+  runs, which goal the worst changing with small changes here (docs/navigation.md).
 
 Global localisation on a large map (ours): ``global_localization_density`` particles per m^2
 of free space (nav2's depot: 90,000), weighed by the first update and resampled to
@@ -259,7 +260,7 @@ class ParticleFilter:
         self._resample_count = 0
         self._w_slow = self._w_fast = 0.0
         self._estimate = cluster_estimate(self.particles, self.weights)
-        self._fix = None  # (pose, odometry) of the last matched scan, while scans are blind
+        self._fix = None  # (pose, odometry) of the last match; None after a rejected one
 
     def _sense(self, ranges, angles, range_max, range_min, sensor) -> None:
         """Likelihood-field sensor model; reweights the particles, updates w_slow and w_fast."""
@@ -309,7 +310,7 @@ class ParticleFilter:
         """Scan-to-map refinement (ours, not ROS's): matches the scan's end points against
         the map from the filter's estimate and, if the match is good, takes it as the
         estimate (and moves the particles with it when ``refinement_shift_particles``); a scan
-        too blind to match carries the last match by the odometry (module docstring)."""
+        with no beam in range carries the last match by the odometry (module docstring)."""
         pose, covariance = self._estimate
         match, new_pose = refine_pose(self._pyramid, self.config, self.map.origin, pose, *scan)
         if match is not None:
