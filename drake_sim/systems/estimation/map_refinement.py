@@ -21,6 +21,17 @@ from drake_sim.systems.estimation.scan_matcher import (
 )
 
 
+def in_range(config: AmclConfig, ranges, range_max: float, range_min: float) -> np.ndarray:
+    """(k,) bool: the beams that returned within the scan's limits, narrowed by the filter's
+    ``laser_max_range`` and ``laser_min_range`` when those are set."""
+    if config.laser_max_range > 0:
+        range_max = min(range_max, config.laser_max_range)
+    if config.laser_min_range > 0:
+        range_min = max(range_min, config.laser_min_range)
+    ranges = np.asarray(ranges, dtype=float)
+    return np.isfinite(ranges) & (ranges < range_max) & (ranges > range_min)
+
+
 def refine_pose(
     pyramid: list[MatchMap],
     config: AmclConfig,
@@ -50,11 +61,7 @@ def refine_pose(
         one way) the refined pose keeps the filter's position along it.
     """
     c = config
-    if c.laser_max_range > 0:
-        range_max = min(range_max, c.laser_max_range)
-    if c.laser_min_range > 0:
-        range_min = max(range_min, c.laser_min_range)
-    hit = np.isfinite(ranges) & (ranges < range_max) & (ranges > range_min)
+    hit = in_range(c, ranges, range_max, range_min)
     if hit.sum() < c.refinement_min_points:
         return None, None
     r, a = ranges[hit], angles[hit]

@@ -97,7 +97,7 @@ from drake_sim.systems.estimation.likelihood_field import (
     scan_likelihood,
     traced_hit_likelihood,
 )
-from drake_sim.systems.estimation.map_refinement import match_pyramid, refine_pose
+from drake_sim.systems.estimation.map_refinement import in_range, match_pyramid, refine_pose
 from drake_sim.systems.estimation.motion_model import sample_motion
 from drake_sim.systems.estimation.pose_histogram import (
     LOCALIZED_SHARE,
@@ -322,7 +322,7 @@ class ParticleFilter:
             elif (
                 self._fix is not None
                 and self.config.refinement_blind_odometry
-                and _blind(self.config, *scan)
+                and not in_range(self.config, scan[0], scan[2], scan[3]).any()  # no beam
             ):
                 fix_pose, fix_odom = self._fix  # the particles stay the filter's
                 self._estimate = (compose(fix_pose, relative_pose(fix_odom, odom)), covariance)
@@ -379,12 +379,3 @@ class ParticleFilter:
         y = y0 + s0 * local[:, 0] + c0 * local[:, 1]
         yaw = self._rng.uniform(-math.pi, math.pi, count)
         return np.stack([x, y, yaw], -1)
-
-
-def _blind(config: AmclConfig, ranges, angles, range_max, range_min, sensor) -> bool:
-    """Whether no beam of the scan returned within the filter's range limits."""
-    if config.laser_max_range > 0:
-        range_max = min(range_max, config.laser_max_range)
-    if config.laser_min_range > 0:
-        range_min = max(range_min, config.laser_min_range)
-    return not np.any(np.isfinite(ranges) & (ranges < range_max) & (ranges > range_min))
