@@ -112,6 +112,15 @@ SECTIONS = (
         "each: map scores, pose error, real-time factor, and the lidar's cost per scan.",
     ),
     Section(
+        "explore",
+        "Exploration",
+        _script("explore", "--runs", "2"),
+        "The lidar robot maps every shipped arena by itself (frontier exploration, "
+        "`python -m drake_sim.explore`), headless, two seeds each: how the run ended, map "
+        "scores, pose error, collisions, and the time against the arena's hand-written mapping "
+        "route (its length at the route follower's speed).",
+    ),
+    Section(
         "slam",
         "Scan-matching SLAM",
         _script("slam"),

@@ -33,7 +33,8 @@ from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.navigation.navigator import Navigator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.estimation.amcl import Amcl
-from drake_sim.systems.estimation.slam import SlamSystem
+from drake_sim.systems.estimation.slam import SCAN_DELAY, SlamSystem
+from drake_sim.systems.viewer.map_view import MapView
 from drake_sim.systems.viewer.navigation_view import NavigationView
 from drake_sim.systems.viewer.trails import TrailVisualizer
 from drake_sim.worlds.arena import Arena
@@ -65,6 +66,8 @@ def make_navigation_diagram(
     goals=(),
     meshcat: Meshcat | None = None,
     log_writer: McapLogWriter | None = None,
+    map_extent=(),
+    map_margin: float = UNKNOWN_MAP_MARGIN,
 ) -> Diagram:
     """Builds the navigation diagram.
 
@@ -80,6 +83,10 @@ def make_navigation_diagram(
         goals: ``[x, y, yaw]`` goals (m, m, rad) the navigator visits in order.
         log_writer: where to write the run as a ROS 2 log (``add_ros_log``: scans, odometry,
             tf with the estimate, the saved map, or the live SLAM's without one), or None.
+        map_extent: more [x, y] points the map of unknown cells covers (no saved map): an
+            explorer's place, whose goals are not known beforehand.
+        map_margin: how far (m) that map reaches beyond the start, the goals and
+            ``map_extent`` (``unknown_map``).
 
     Exported outputs: ``true_pose``, ``odometry_pose``, ``estimated_pose`` (AMCL's, or the
     odometry's with no map),
@@ -92,7 +99,8 @@ def make_navigation_diagram(
     X_base_sensor = robot_parts.X_base_sensor
     if occupancy_map is None:
         points = [np.asarray(start)[:2], *(np.asarray(g)[:2] for g in goals)]
-        nav_map = unknown_map(points, GROUND_RESOLUTION)
+        points += [np.asarray(p, dtype=float)[:2] for p in map_extent]
+        nav_map = unknown_map(points, GROUND_RESOLUTION, map_margin)
         estimate, covariance, particles = _no_map_estimate(
             builder, scenario, robot_parts, start, nav_map
         )
@@ -145,6 +153,8 @@ def make_navigation_diagram(
         LogVectorOutput(port, builder, scenario.log_period).set_name(name)
     if meshcat is not None:
         _add_views(builder, meshcat, scenario, nav_map, robot_parts, estimate, particles, navigator)
+        if builder.HasSubsystemNamed("slam"):
+            _add_slam_view(builder, meshcat, scenario, robot, robot_parts)
     diagram = builder.Build()
     diagram.set_name("navigation")
     return diagram
@@ -225,3 +235,23 @@ def _add_views(builder, meshcat, scenario, occupancy_map, robot_parts, estimate,
     )
     builder.Connect(estimate, trails.GetInputPort("odometry_pose"))
     builder.Connect(robot_parts.true_pose, trails.GetInputPort("true_pose"))
+
+
+def _add_slam_view(builder, meshcat, scenario, robot, robot_parts) -> None:
+    """With no saved map: the live SLAM's map as it grows, and the last scan (as mapping
+    shows them)."""
+    slam = builder.GetSubsystemByName("slam")
+    view = builder.AddNamedSystem(
+        "map_view",
+        MapView(
+            meshcat=meshcat,
+            map_period=scenario.view_period,
+            scan_period=1.0 / scenario.lidar.rate,
+            scan_offset=2 * SCAN_DELAY,
+            X_base_sensor=(robot.lidar.x, robot.lidar.y, 0.0),
+            scan_height=robot.scan_height,
+        ),
+    )
+    builder.Connect(slam.GetOutputPort("map"), view.GetInputPort("map"))
+    builder.Connect(robot_parts.scan, view.GetInputPort("scan"))
+    builder.Connect(slam.GetOutputPort("scan_pose"), view.GetInputPort("pose"))

@@ -123,10 +123,13 @@ def default_scenario_file() -> Path:
     return config_dir() / "navigation_scenario.yaml"
 
 
-def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
+def load_navigation_scenario(
+    path, overrides=(), *, schema=NavigationScenario, check=check_navigation_scenario
+):
     """The scenario at ``path`` with ``overrides`` (``KEY=VALUE`` or ``(label, KEY=VALUE)``)
     applied, its ``params`` files' keys under them (the files' values first, in order, the
-    overrides' on top: a ``--set amcl.x=...`` still wins), checked.
+    overrides' on top: a ``--set amcl.x=...`` still wins), checked. ``schema`` and ``check``:
+    a scenario that extends this one (the explore app's) and its check.
 
     Raises:
         ConfigError: naming the file (the scenario's, the parameter file's or ``--set``) and
@@ -134,18 +137,18 @@ def load_navigation_scenario(path, overrides=()) -> NavigationScenario:
     """
     overrides = list(overrides)
     what = "scenario file"
-    scenario = load_checked(NavigationScenario, path, check_navigation_scenario, what=what)
+    scenario = load_checked(schema, path, check, what=what)
     base = scenario
     if overrides:
-        scenario = apply_overrides(NavigationScenario, scenario, overrides)
+        scenario = apply_overrides(schema, scenario, overrides)
     if not scenario.params:
-        return check_navigation_scenario(scenario, "--set")
+        return check(scenario, "--set")
     for name in scenario.params:
         params = config_path(name)
         where = str(params)
         labelled = [(f"{where}: {o.partition('=')[0]}", o) for o in ros_overrides(params)]
-        base = apply_overrides(NavigationScenario, base, labelled)
-        base = check_navigation_scenario(base, where)
+        base = apply_overrides(schema, base, labelled)
+        base = check(base, where)
     if overrides:
-        base = apply_overrides(NavigationScenario, base, overrides)
-    return check_navigation_scenario(base, "--set")
+        base = apply_overrides(schema, base, overrides)
+    return check(base, "--set")

@@ -28,6 +28,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+import drake_sim.runs.explore as explore_app
 import drake_sim.runs.mapping as mapping_app
 from drake_sim.runs import command as run_command
 
@@ -351,6 +352,22 @@ def _mapping_outputs(args) -> list[tuple[Path, bool]]:
     return [(Path(f"{out}.yaml"), False), (Path(f"{out}.pgm"), False)]
 
 
+def _explore_outputs(args) -> list[tuple[Path, bool]]:
+    """``python -m drake_sim.explore`` writes ``--out``'s (default ``maps/<place>_explored``,
+    the place the arena or the ``--world`` map) ``.yaml`` and ``.pgm``."""
+    out = args.out
+    if out is None:
+        place = args.world or args.arena
+        if place is None:  # the scenario's
+            path = args.scenario or explore_app.RECIPE.scenario.default_file()
+            scenario = yaml.safe_load(Path(path).read_text())
+            place = scenario.get("arena") if isinstance(scenario, dict) else None
+        if place is None:
+            return []
+        out = Path("maps") / f"{Path(place).stem}_explored"
+    return [(Path(f"{out}.yaml"), False), (Path(f"{out}.pgm"), False)]
+
+
 def _sweep_outputs(args) -> list[tuple[Path, bool]]:
     """``python -m drake_sim.sweep SWEEP.yaml`` writes ``--out`` (default
     ``sweeps/<name>/``) with its ``results.csv``."""
@@ -365,6 +382,7 @@ def _sweep_outputs(args) -> list[tuple[Path, bool]]:
 
 _DEFAULT_OUTPUTS = {
     "drake_sim.mapping": {"out": _mapping_outputs},
+    "drake_sim.explore": {"out": _explore_outputs},
     "drake_sim.sweep": {"out": _sweep_outputs},
 }
 """Per module, the options whose outputs an entry point names itself (replacing the generic

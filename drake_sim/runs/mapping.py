@@ -180,39 +180,22 @@ class MappingRun(SimulationRun):
         return files
 
     def trajectories(self) -> dict[str, np.ndarray]:
-        """Per processed scan: ``time`` (n,), and ``slam``, ``odometry``, ``truth`` (n, 3)
-        poses ``[x, y, yaw]`` at that instant."""
-        history = self._slam.history(self._slam.GetMyContextFromRoot(self.context))
-        log = self._truth_log.FindLog(self.context)
-        times, samples = log.sample_times(), log.data()
-        truth = np.zeros((len(history), 3))
-        if len(times) and len(history):
-            yaw = np.unwrap(samples[2])
-            for k, series in enumerate((samples[0], samples[1], yaw)):
-                truth[:, k] = np.interp(history[:, 0], times, series)
-        return {
-            "time": history[:, 0],
-            "slam": history[:, 1:4],
-            "odometry": history[:, 4:7],
-            "truth": truth,
-        }
+        """``slam_paths`` of this run."""
+        return slam_paths(self._slam, self._truth_log, self.context)
 
     def report(self) -> MappingReport:
         """Scores the run so far (see the module docstring)."""
         paths = self.trajectories()
-        truth_grid = arena_grid(
-            self.arena, self.scenario.slam.resolution, height=self.robot.lidar.z
+        iou, known = map_scores(
+            self.occupancy_map(), self.arena, self.robot, self.scenario.slam, self.world_map
         )
-        if self.world_map is not None:  # a map's world: its known cells are the place
-            truth_grid = known_truth(truth_grid, self.world_map)
-        occupancy_map = self.occupancy_map()
         slam_error = np.hypot(*(paths["slam"][:, :2] - paths["truth"][:, :2]).T)
         odom_error = np.hypot(*(paths["odometry"][:, :2] - paths["truth"][:, :2]).T)
         nan = math.nan
         return MappingReport(
             end=self.end,
-            map_iou=occupancy_iou(occupancy_map, truth_grid, tolerance_cells=1),
-            known_fraction=known_fraction(occupancy_map, truth_grid),
+            map_iou=iou,
+            known_fraction=known,
             pose_rmse_m=float(np.sqrt(np.mean(slam_error**2))) if len(slam_error) else nan,
             final_pose_error_m=float(slam_error[-1]) if len(slam_error) else nan,
             final_yaw_error_deg=_yaw_error_deg(paths["slam"], paths["truth"]),
@@ -231,13 +214,8 @@ class MappingRun(SimulationRun):
         report."""
         complete = self.end == "route_done" or self.teleop
         try:
-            if complete:
-                self.files = self.save_map(self.out)
-            else:
-                self.files = self.save_map(self.out.with_name(f"{self.out.name}.partial"))
-                old = Path(f"{self.out}.yaml")
-                kept = f"; {old} is kept as it was" if old.exists() else ""
-                print(f"the run ended early ({self.end}): its partial map is {self.files[1]}{kept}")
+            self.files = save_run_map(self.occupancy_map(), self.out, complete, self.end)
+            self.map_files = [str(f) for f in self.files]
         finally:  # the log is written whatever became of the map
             close_ros_log(
                 self._log,
@@ -264,6 +242,52 @@ class MappingRun(SimulationRun):
                 f"({100 * report.route_fraction:.0f} % of its waypoints)"
             )
         return super().error(report)
+
+
+def save_run_map(occupancy_map, out: Path, complete: bool, end: str) -> tuple[Path, Path]:
+    """Writes a run's map as map_server files at ``out`` when the run is ``complete``, else
+    beside it as ``NAME.partial`` and says so (ended by ``end``): a run stopped or failed early
+    never replaces a map that was there. Returns the ``.pgm`` and ``.yaml`` paths."""
+    if complete:
+        return save_map(occupancy_map, out)
+    files = save_map(occupancy_map, out.with_name(f"{out.name}.partial"))
+    old = Path(f"{out}.yaml")
+    kept = f"; {old} is kept as it was" if old.exists() else ""
+    print(f"the run ended early ({end}): its partial map is {files[1]}{kept}")
+    return files
+
+
+def slam_paths(slam_system, truth_log, context) -> dict[str, np.ndarray]:
+    """Per scan the live SLAM (``slam_system``, a ``SlamSystem``) processed: ``time`` (n,),
+    and ``slam``, ``odometry``, ``truth`` (n, 3) poses ``[x, y, yaw]`` at that instant
+    (``truth_log``: the true pose's ``VectorLogSink``; ``context``: the root context)."""
+    history = slam_system.history(slam_system.GetMyContextFromRoot(context))
+    log = truth_log.FindLog(context)
+    times, samples = log.sample_times(), log.data()
+    truth = np.zeros((len(history), 3))
+    if len(times) and len(history):
+        yaw = np.unwrap(samples[2])
+        for k, series in enumerate((samples[0], samples[1], yaw)):
+            truth[:, k] = np.interp(history[:, 0], times, series)
+    return {
+        "time": history[:, 0],
+        "slam": history[:, 1:4],
+        "odometry": history[:, 4:7],
+        "truth": truth,
+    }
+
+
+def map_scores(occupancy_map, arena, robot, slam_config, world_map=None) -> tuple[float, float]:
+    """``(map_iou, known_fraction)`` of ``occupancy_map`` against ``arena``'s ground truth at
+    the lidar's height, in cells of the SLAM's resolution (a map's world, ``world_map``: its
+    known cells are the place)."""
+    truth_grid = arena_grid(arena, slam_config.resolution, height=robot.lidar.z)
+    if world_map is not None:
+        truth_grid = known_truth(truth_grid, world_map)
+    return (
+        occupancy_iou(occupancy_map, truth_grid, tolerance_cells=1),
+        known_fraction(occupancy_map, truth_grid),
+    )
 
 
 def _yaw_error_deg(estimate: np.ndarray, truth: np.ndarray) -> float:

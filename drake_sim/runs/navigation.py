@@ -22,7 +22,7 @@ import numpy as np
 from pydrake.geometry import Meshcat
 
 from diagrams.lidar_robot import ROBOT_NAME
-from diagrams.navigation import make_navigation_diagram
+from diagrams.navigation import UNKNOWN_MAP_MARGIN, make_navigation_diagram
 from diagrams.navigation_scenario import NavigationScenario
 from drake_sim.base.errors import ConfigError
 from drake_sim.base.map_files import OccupancyMap
@@ -119,7 +119,9 @@ class NavigationRun(SimulationRun):
     the AMCL config's), by default the true ``start``; with ``global_localization`` from
     particles over the whole map instead. With no ``occupancy_map`` there is no AMCL: the
     robot localises with the live SLAM (or its odometry) and plans on what its lidar has seen
-    (``diagrams.navigation``). The scenario's ``random_seed`` seeds the odometry errors, the
+    (``diagrams.navigation``; ``map_extent``: more points its map covers, ``map_margin`` how
+    far beyond). The scenario's
+    ``random_seed`` seeds the odometry errors, the
     lidar noise and AMCL. With a ``log_writer`` the run is written as a ROS 2 log, closed by
     ``finish`` (``drake_sim.runs.ros_recording``).
     """
@@ -143,6 +145,8 @@ class NavigationRun(SimulationRun):
         meshcat: Meshcat | None = None,
         realtime: bool = False,
         log_writer: McapLogWriter | None = None,
+        map_extent=(),
+        map_margin: float = UNKNOWN_MAP_MARGIN,
     ):
         self.scenario = scenario
         self.robot = robot
@@ -163,6 +167,8 @@ class NavigationRun(SimulationRun):
                 goals=self.goals,
                 meshcat=meshcat,
                 log_writer=log_writer,
+                map_extent=map_extent,
+                map_margin=map_margin,
             )
             super().__init__(diagram, scenario.random_seed, realtime=realtime)
         self.navigator = self.diagram.GetSubsystemByName("navigator")

@@ -95,12 +95,14 @@ RUNNERS = {
             {"goals": 3, "map": None, "global_localization": False, "robot": None},
             ("robot", "map"),
         ),
+        Runner("explore", "drake_sim.runs.explore", {"duration": None, "robot": None}, ("robot",)),
     )
 }
 """flip: ``duration`` s simulated; walle: ``duration`` (None: the app's own, a lap's worth
 when following); navigation: ``goals`` random goals drawn with the rollout's seed (the same sets
 at every value of the other parameters), ``map`` a map_server YAML (default: the arena's ground
-truth at the lidar's height), ``global_localization``; each with ``robot``, a robot YAML."""
+truth at the lidar's height), ``global_localization``; explore: ``duration`` (None: the
+scenario's ``time_limit``; the map is not saved); each with ``robot``, a robot YAML."""
 
 
 def get_runner(name: str, where: str = "sweep") -> Runner:

@@ -48,7 +48,7 @@ class _SlamState:
         other.slam = copy.deepcopy(self.slam, memo)
         other.last_scan_time = self.last_scan_time
         other.odometry_at_scan = self.odometry_at_scan.copy()
-        other.history = [row[:] for row in self.history]
+        other.history = list(self.history)  # rows are never changed once appended: shared
         return other
 
 

@@ -6,6 +6,7 @@ from drake_sim.robots.ddrive import default_robot_file
 from drake_sim.sweep import jobs
 from drake_sim.sweep import runners as mut
 from drake_sim.sweep.spec import load_sweep
+from tests.drake_sim.runs.test_explore import SMALL_ROOM
 from tests.drake_sim.sweep.sweep_files import tiny_flip, write_sweep
 from tests.drake_sim.sweep.test_jobs import Inner, Outer
 
@@ -41,7 +42,10 @@ def test_make_job_resolves_the_robot_file_next_to_the_sweep(tmp_path):
 @pytest.mark.parametrize(
     "text, needle",
     [
-        ("runner: rocket\n", "unknown runner 'rocket' (known: flip, pickplace, walle, navigation)"),
+        (
+            "runner: rocket\n",
+            "unknown runner 'rocket' (known: flip, pickplace, walle, navigation, explore)",
+        ),
         ("runner: flip\noptions: {speed: 1}\n", "unknown option 'speed' for flip"),
         (
             "runner: flip\nparameters: {flip.drive_sped: {grid: [1]}}\n",
@@ -132,6 +136,23 @@ def test_navigation_runner_checks_its_paths_and_drives_to_a_goal(tmp_path):
     report = row["report"]
     assert report["goals_reached"] == 1 and report["reached_all"] and report["collisions"] == 0
     assert report["max_position_error_m"] <= 0.05
+
+
+def test_explore_runner_explores_an_arena_of_the_sweep(tmp_path):
+    arena = tmp_path / "small.yaml"
+    arena.write_text(SMALL_ROOM)
+    job = job_of(
+        tmp_path,
+        f"runner: explore\nparameters: {{arena: {{grid: [{arena}]}}}}\n"
+        "metrics: [known_fraction, map_iou, frontiers_visited]\n",
+    )
+    with pytest.raises(ConfigError, match="unknown parameter path 'exploration.bogus'"):
+        job_of(tmp_path, "runner: explore\nparameters: {exploration.bogus: {grid: [1]}}\n")
+    row = mut.run_rollout(job, {"index": 0, "seed": 1, "overrides": {"arena": str(arena)}})
+    assert row["status"] == "ok", row["reason"]
+    report = row["report"]
+    assert report["end"] == "explored" and report["known_fraction"] >= 0.95
+    assert report["collisions"] == 0 and report["map_files"] is None
 
 
 def test_random_scenes_are_generated_by_number(tmp_path):

@@ -19,6 +19,7 @@ def test_shipped_sweeps_parse():
     for path in sorted((config_dir() / "sweeps").glob("*.yaml")):
         sizes[path.stem] = mut.load_sweep(path).size
     assert sizes == {
+        "explore_arenas": 6,
         "flip_imu_noise": 25,
         "flip_robot_variants": 60,
         "navigation_lidar_noise": 15,

@@ -216,6 +216,8 @@ def test_copies_are_independent():
     shifted = helpers.World(2.0, 2.0).cast((0.5, 0.0, 0.0), angles)
     twin.update(shifted, angles, (0.5, 0.0, 0.0), range_max=3.5)
     assert twin.scans == 2 and dut.scans == 1
+    np.testing.assert_array_equal(dut.trajectory, [[0.0, 0.0, 0.0]])  # the poses are shared
+    assert len(twin.times) == 2 and len(dut.times) == 1  # ... but not the lists
     assert not np.array_equal(twin.grids[0].log_odds, dut.grids[0].log_odds)
     np.testing.assert_allclose(twin.pose, (0.5, 0.0, 0.0), atol=0.03)
 
