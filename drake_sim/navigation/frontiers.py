@@ -87,8 +87,8 @@ def find_frontiers(
     occupancy_map: OccupancyMap, robot_xy, config: FrontierConfig, blacklist=()
 ) -> list[Frontier]:
     """The frontiers the robot can reach from ``robot_xy`` on ``occupancy_map``, cheapest
-    first (none: nothing left to explore from here). ``blacklist``: [x, y] goals to keep away
-    from (``FrontierConfig.blacklist_radius``)."""
+    first (none: nothing left to explore from here). ``blacklist``: [x, y] points whose
+    frontier cells within ``FrontierConfig.blacklist_radius`` do not count."""
     grid = occupancy_map
     resolution = grid.resolution
     frontier = frontier_mask(grid)
@@ -132,14 +132,22 @@ def find_frontiers(
     return sorted(found, key=lambda f: f.cost)
 
 
+START_REACH = 1.0
+"""m: the robot's own cell may be too near a wall to count as open, or not yet free; paths
+start from the nearest open cell within this far of it (none further: it might be beyond a
+wall)."""
+
+
 def _robot_cell(grid: OccupancyMap, robot_xy, open_cells: np.ndarray) -> tuple[int, int] | None:
-    """The open cell nearest the robot (its own cell may be too near a wall, or not yet free);
-    None when no cell is open."""
+    """The open cell nearest the robot within ``START_REACH``; None when there is none."""
     rows, cols = np.nonzero(open_cells)
     if len(rows) == 0:
         return None
     r, c = (int(v[0]) for v in grid.cell_of(np.asarray(robot_xy, dtype=float)[None, :2]))
-    nearest = np.argmin((rows - r) ** 2 + (cols - c) ** 2)
+    squared = (rows - r) ** 2 + (cols - c) ** 2
+    nearest = np.argmin(squared)
+    if squared[nearest] * grid.resolution**2 > START_REACH**2:
+        return None
     return int(rows[nearest]), int(cols[nearest])
 
 

@@ -89,6 +89,21 @@ def test_short_frontiers_are_noise_and_the_blacklist_removes_one():
     assert find_frontiers(grid, [1.0, 1.5], FrontierConfig(), blacklist=[[0.0, 0.0]]) != []
 
 
+def test_paths_start_from_an_open_cell_near_the_robot_only():
+    cells = _room(cols=140)
+    cells[22:38, 59] = FREE  # the doorway
+    cells[12:48, 90:130] = FREE  # a room beyond a wall the robot is in
+    grid = OccupancyMap(cells, RES)
+    # Beyond the wall: its own edges are frontiers, the doorway is out of reach.
+    beyond = find_frontiers(grid, [5.5, 1.5], FrontierConfig())
+    assert beyond and all(f.goal[0] > 89 * RES for f in beyond)
+    # Standing 0.1 m from the west wall (its own cell not open): paths start beside it.
+    (door,) = find_frontiers(grid, [0.65, 1.5], FrontierConfig())
+    assert door.distance_m > 1.5
+    # Far from any open cell (the unknown outside): nothing is reachable.
+    assert find_frontiers(grid, [0.05, 0.05], FrontierConfig()) == []
+
+
 def test_no_open_cell_means_no_frontier():
     cells = _room()
     cells[22:38, 59] = FREE

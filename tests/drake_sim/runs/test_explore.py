@@ -5,6 +5,9 @@ import pytest
 
 import drake_sim.runs.explore as mut
 from drake_sim.base.map_files import load_map
+from drake_sim.runs import mapping
+from drake_sim.worlds.arena import load_arena, shipped_arenas
+from drake_sim.worlds.route import default_route_file, load_route
 
 SMALL_ROOM = """size: [3.0, 2.4]
 wall: {height: 0.4, thickness: 0.05}
@@ -75,3 +78,21 @@ def test_the_canvas_covers_the_place_and_the_slam_starts_at_the_start(small_room
     assert run._choose(0.0) is None and run._choose(1.0) is None and run.frontiers == []
     pose = run.diagram.GetOutputPort("estimated_pose").Eval(run.context)
     assert np.allclose(pose, [-1.0, -0.6, 0.0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("arena_file", shipped_arenas(), ids=lambda p: p.stem)
+def test_every_shipped_arena_is_explored_faster_than_its_route(arena_file):
+    """The acceptance: explored, known and IoU >= 0.95, no collision, pose RMSE <= 5 cm, within
+    600 s and 1.5 times the time the arena's mapping route takes (its length at the route
+    follower's speed)."""
+    arena = load_arena(arena_file)
+    route = load_route(default_route_file(arena_file), arena)
+    speed = mapping.RECIPE.load().scenario.route_follower.speed
+    route_s = mapping.route_length(arena.start_pose(), route.waypoints) / speed
+    run = mut.RECIPE.start(overrides=[f"arena={arena_file}"])
+    assert run.run(run.default_duration()) == "explored"
+    report = run.report()
+    assert report.known_fraction >= 0.95 and report.map_iou >= 0.95
+    assert report.collisions == 0 and report.pose_rmse_m <= 0.05
+    assert report.sim_time_s <= min(600.0, 1.5 * route_s)
