@@ -120,9 +120,8 @@ class NavigationRun(SimulationRun):
     particles over the whole map instead. With no ``occupancy_map`` there is no AMCL: the
     robot localises with the live SLAM (or its odometry) and plans on what its lidar has seen
     (``diagrams.navigation``; ``map_extent``: more points its map covers, ``map_margin`` how
-    far beyond). The scenario's
-    ``random_seed`` seeds the odometry errors, the
-    lidar noise and AMCL. With a ``log_writer`` the run is written as a ROS 2 log, closed by
+    far beyond). The scenario's ``random_seed`` seeds the odometry errors, the lidar noise and
+    AMCL. With a ``log_writer`` the run is written as a ROS 2 log, closed by
     ``finish`` (``drake_sim.runs.ros_recording``).
     """
 

@@ -125,8 +125,9 @@ class ScanMatchingSlam:
     def __deepcopy__(self, memo):
         """A copy for Drake's state (three at every scan): the grids, match maps and the rest
         copied deeply; the trajectory's poses and times are never changed once appended, so
-        shared (the lists copied). Copied deeply, they made each copy grow with the run: a
-        120 s exploration of the warehouse spent 12 of its 47 s copying (581,000 arrays)."""
+        shared (the lists copied). Copied deeply, they made each copy grow with the run: 120 s
+        of exploring the warehouse (600 scans) copied 581,000 arrays, 8.7 of its 39 s of wall
+        time; shared, 5.3 of 35 s, and no longer growing."""
         other = ScanMatchingSlam.__new__(ScanMatchingSlam)
         memo[id(self)] = other
         for key, value in self.__dict__.items():
