@@ -71,7 +71,7 @@ def test_a_goal_that_does_not_reveal_its_frontier_is_blacklisted(small_room):
             assert np.min(np.hypot(*(frontier.cells - cell).T)) > run.config.blacklist_radius
 
 
-def test_the_canvas_covers_the_place_and_the_slam_starts_at_the_start(small_room):
+def test_before_the_first_scan_nothing_is_explored_and_the_slam_is_at_the_start(small_room):
     run = mut.RECIPE.start(overrides=[f"arena={small_room}"])
     assert run.amcl is None
     # Before the first scan the map is empty: no frontier, but not explored either.
