@@ -174,13 +174,15 @@ class ExploreRun(NavigationRun):
 
     def _choose(self, now: float) -> str | None:
         pose = self.diagram.GetOutputPort("estimated_pose").Eval(self.context)
-        self.frontiers = find_frontiers(self.occupancy_map(), pose[:2], self.config, self.blacklist)
-        ended = self._steer(pose, now)
+        grid = self.occupancy_map()
+        self.frontiers = find_frontiers(grid, pose[:2], self.config, self.blacklist)
+        ended = self._steer(pose, now, mapped=bool(grid.free().any()))
         self._draw()
         return ended
 
-    def _steer(self, pose, now: float) -> str | None:
-        """Keeps the goal, or sends the cheapest frontier's; "explored" when none is left."""
+    def _steer(self, pose, now: float, mapped: bool) -> str | None:
+        """Keeps the goal, or sends the cheapest frontier's; "explored" when none is left
+        (``mapped``: the map has free cells, the first scan is in)."""
         active = self._handle is not None and not self._handle.done()
         if not self.frontiers:
             # Explored when no frontier is left at two choices in a row and the map has free
@@ -189,7 +191,7 @@ class ExploreRun(NavigationRun):
                 self._handle.cancel()
             self.target = None
             self._empty += 1
-            explored = self._empty >= 2 and self.occupancy_map().free().any()
+            explored = self._empty >= 2 and mapped
             return "explored" if explored else None
         self._empty = 0
         if active:
