@@ -5,6 +5,8 @@ controller and wheel odometry, the lidar, the SLAM, and a route follower (or tel
 ``make_mapping_diagram`` builds it; a pure builder (nothing is simulated here).
 """
 
+import dataclasses as dc
+
 import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.systems.framework import Diagram, DiagramBuilder
@@ -16,6 +18,7 @@ from drake_sim.base.mcap_files import McapLogWriter
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.control.route_follower import RouteFollower
 from drake_sim.systems.estimation.slam import SCAN_DELAY, SlamSystem
+from drake_sim.systems.estimation.slam_config import map_square
 from drake_sim.systems.viewer.map_view import MapView
 from drake_sim.systems.viewer.teleop import MeshcatTeleop, TeleopConfig
 from drake_sim.systems.viewer.trails import TrailVisualizer
@@ -41,7 +44,7 @@ def make_mapping_diagram(
     and the scan as they grow (see ``MapView``). With a ``log_writer`` the run is written
     to it as a ROS 2 log (``add_ros_log``: scans, odometry, tf, the SLAM's map). The SLAM
     (``slam``, a ``SlamSystem``) starts at the arena's start pose, so its map frame is the
-    arena's.
+    arena's; its map holds the whole arena (``slam_config.map_square``).
 
     Exported outputs: ``true_pose``, ``odometry_pose``, ``slam_pose`` (``[x, y, yaw]``),
     ``scan`` (``LaserScan``), ``map`` (``OccupancyMap``), ``command`` (``cmd_vel``) and, with a
@@ -51,13 +54,17 @@ def make_mapping_diagram(
     start = np.array(arena.start_pose())
     robot_parts = add_lidar_robot(builder, scenario, robot=robot, world=arena, start=start)
     X_base_sensor = robot_parts.X_base_sensor
+    # The SLAM's map holds the arena and its walls (centred on the start when it can).
+    half = np.array(arena.size, dtype=float) / 2 + arena.wall.thickness
+    center, size = map_square(-half, half, start[:2], scenario.slam.map_size)
     slam = builder.AddNamedSystem(
         "slam",
         SlamSystem(
-            config=scenario.slam,
+            config=dc.replace(scenario.slam, map_size=size),
             period=1.0 / scenario.lidar.rate,
             initial_pose=start,
             X_base_sensor=X_base_sensor,
+            map_center=center,
         ),
     )
     builder.Connect(robot_parts.scan, slam.GetInputPort("scan"))

@@ -34,6 +34,7 @@ from drake_sim.navigation.navigator import Navigator
 from drake_sim.robots.turtlebot3_params import Turtlebot3Params
 from drake_sim.systems.estimation.amcl import Amcl
 from drake_sim.systems.estimation.slam import SCAN_DELAY, SlamSystem
+from drake_sim.systems.estimation.slam_config import map_square
 from drake_sim.systems.viewer.map_view import MapView
 from drake_sim.systems.viewer.navigation_view import NavigationView
 from drake_sim.systems.viewer.trails import TrailVisualizer
@@ -165,12 +166,14 @@ GROUND_RESOLUTION = 0.05
 
 
 def _no_map_estimate(builder, scenario, robot_parts, start, nav_map):
-    """The pose estimate with no map: the live SLAM's (named ``slam``, its map as large as
+    """The pose estimate with no map: the live SLAM's (named ``slam``, its map holding
     ``nav_map``, started at the true ``start``) or the wheel odometry's
     (``scenario.no_map_localization``); a zero covariance and no particles beside it."""
     estimate = robot_parts.odometry_pose
     if scenario.no_map_localization == "slam":
-        size = max(scenario.slam.map_size, nav_map.width_m, nav_map.height_m)
+        low = np.array(nav_map.origin[:2], dtype=float)
+        high = low + [nav_map.width_m, nav_map.height_m]
+        center, size = map_square(low, high, np.asarray(start)[:2], scenario.slam.map_size, 0.0)
         slam = builder.AddNamedSystem(
             "slam",
             SlamSystem(
@@ -178,6 +181,7 @@ def _no_map_estimate(builder, scenario, robot_parts, start, nav_map):
                 period=1.0 / scenario.lidar.rate,
                 initial_pose=np.asarray(start, dtype=float),
                 X_base_sensor=robot_parts.X_base_sensor,
+                map_center=center,
             ),
         )
         builder.Connect(robot_parts.scan, slam.GetInputPort("scan"))

@@ -55,3 +55,17 @@ def test_teleop_needs_no_route_and_adds_the_views(robot, arena):
     dut.ForcedPublish(simulator.get_context())
     for path in ("/mapping/map", "/mapping/scan", "/mapping/estimate", "/drake/visualizer"):
         assert meshcat.HasPath(path), path
+
+
+def test_the_slams_map_holds_an_arena_entered_at_its_corner(robot, tmp_path):
+    """An 18 x 14 m hall started in its corner: the SLAM's square holds all of it (30 m
+    centred on the start reached 7 m of the far wall's 9 and lost the hall beyond)."""
+    hall = tmp_path / "hall.yaml"
+    hall.write_text("size: [18.0, 14.0]\nstart: {x: -8.0, y: -6.0, yaw: 45}\n")
+    dut = mut.make_mapping_diagram(MappingScenario(), robot, load_arena(hall), [[-7.0, -5.0]])
+    slam_system = dut.GetSubsystemByName("slam")
+    context = slam_system.GetMyContextFromRoot(dut.CreateDefaultContext())
+    for grid in slam_system.slam(context).grids:
+        low = np.array(grid.origin[:2])
+        high = low + np.array(grid.log_odds.shape[::-1]) * grid.resolution
+        assert np.all(low <= [-9.05, -7.05]) and np.all(high >= [9.05, 7.05]), (low, high)

@@ -74,3 +74,23 @@ def test_with_no_map_the_robot_drives_on_what_it_sees(localization):
     assert estimate[:2] == pytest.approx(truth[:2], abs=0.02)
     assert len(dut.GetOutputPort("particles").Eval(context)) == 0
     assert meshcat.HasPath("/navigation/costmap")
+
+
+def test_with_no_map_the_slams_map_holds_the_navigators_map():
+    """A start in the corner of a large place (``map_extent``, as the explorer gives it): the
+    SLAM's square reaches its far walls, not only ``map_size`` / 2 round the start."""
+    arena = load_arena(nh.arena_file("room"))
+    scenario = nh.scenario()
+    scenario.no_map_localization = "slam"
+    scenario.slam.map_size = 8.0
+    start = np.array(arena.start_pose())
+    dut = mut.make_navigation_diagram(
+        scenario, nh.robot(), arena, None, start=start, map_extent=[[9.0, 7.0], [-3.0, -3.0]],
+        map_margin=1.0,
+    )  # fmt: skip
+    slam_system = dut.GetSubsystemByName("slam")
+    context = slam_system.GetMyContextFromRoot(dut.CreateDefaultContext())
+    grid = slam_system.slam(context).grids[0]
+    low = np.array(grid.origin[:2])
+    high = low + np.array(grid.log_odds.shape[::-1]) * grid.resolution
+    assert np.all(low <= [-4.0, -4.0]) and np.all(high >= [9.8, 7.8]), (low, high)

@@ -29,12 +29,15 @@ from drake_sim.systems.estimation.slam_config import SlamConfig
 
 
 def make_slam(
-    config: SlamConfig | None = None, initial_pose=(0.0, 0.0, 0.0), X_base_sensor=(0.0, 0.0, 0.0)
+    config: SlamConfig | None = None,
+    initial_pose=(0.0, 0.0, 0.0),
+    X_base_sensor=(0.0, 0.0, 0.0),
+    map_center=None,
 ):
     """A ``GraphSlam`` when ``config.loop_closure.enabled``, else a ``ScanMatchingSlam``."""
     config = config if config is not None else SlamConfig()
     kind = GraphSlam if config.loop_closure.enabled else ScanMatchingSlam
-    return kind(config, initial_pose, X_base_sensor=X_base_sensor)
+    return kind(config, initial_pose, X_base_sensor=X_base_sensor, map_center=map_center)
 
 
 class GraphSlam:
@@ -45,6 +48,7 @@ class GraphSlam:
         config: the parameters (``config.loop_closure`` for the graph).
         initial_pose: (x, y, yaw) of the base in the world at the first scan (m, rad).
         X_base_sensor: (x, y, yaw) of the lidar frame in the base frame (m, rad).
+        map_center: (x, y) m, the centre of the square maps (None: ``initial_pose``'s).
     """
 
     def __init__(
@@ -52,8 +56,11 @@ class GraphSlam:
         config: SlamConfig | None = None,
         initial_pose=(0.0, 0.0, 0.0),
         X_base_sensor=(0.0, 0.0, 0.0),
+        map_center=None,
     ):
-        self.local = ScanMatchingSlam(config, initial_pose, X_base_sensor=X_base_sensor)
+        self.local = ScanMatchingSlam(
+            config, initial_pose, X_base_sensor=X_base_sensor, map_center=map_center
+        )
         self.config = self.local.config
         self.graph = PoseGraph()
         self._inserted: list[tuple] = []  # per keyframe: its scan as the map took it

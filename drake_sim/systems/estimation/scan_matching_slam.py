@@ -37,7 +37,12 @@ scans): 0.016 to 0.017 m with hector's marking, 0.004 to 0.011 m with the hit of
 margin below, about 4 to 5 ms per scan.
 
 The map frame is the world frame: the first scan is inserted at ``initial_pose``, and the grids
-(``map_size`` m square) are centred on it.
+(``map_size`` m square) are centred on it, or on ``map_center`` when the place to map is known
+(``slam_config.map_square``: a robot starting in the corner of an 18 m hall otherwise mapped
+only the 15 m a 30 m map reaches on each side of the start; beyond that edge it saw one pillar,
+turned 35 degrees off and lost the hall). The cells lie on one lattice (multiples of the
+coarsest cell) wherever the square is centred: moving it changes what it reaches, and the
+poses only as far as the rounding of the cells' coordinates does.
 """
 
 import copy
@@ -75,6 +80,7 @@ class ScanMatchingSlam:
         config: the parameters.
         initial_pose: (x, y, yaw) of the base in the world at the first scan (m, rad).
         X_base_sensor: (x, y, yaw) of the lidar frame in the base frame (m, rad).
+        map_center: (x, y) m, the centre of the square maps (None: ``initial_pose``'s).
     """
 
     def __init__(
@@ -82,15 +88,18 @@ class ScanMatchingSlam:
         config: SlamConfig | None = None,
         initial_pose=(0.0, 0.0, 0.0),
         X_base_sensor=(0.0, 0.0, 0.0),
+        map_center=None,
     ):
         self.config = config = config if config is not None else SlamConfig()
         config.check()
         self.X_base_sensor = np.array(X_base_sensor, dtype=float)
         self._pose = np.array(initial_pose, dtype=float)
+        center = self._pose[:2] if map_center is None else np.asarray(map_center, dtype=float)
+        if center.shape != (2,) or not np.all(np.isfinite(center)):
+            raise ValueError(f"map_center must be finite (x, y), got {map_center!r}")
         coarsest = config.resolution * 2 ** (config.levels - 1)
         corner = [
-            round(math.floor((v - config.map_size / 2) / coarsest) * coarsest, 9)
-            for v in self._pose[:2]
+            round(math.floor((v - config.map_size / 2) / coarsest) * coarsest, 9) for v in center
         ]
         self.grids = [
             LogOddsGrid(

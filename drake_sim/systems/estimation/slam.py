@@ -71,7 +71,8 @@ class SlamSystem(LeafSystem):
     after it was taken (``period``: the lidar's). ``scan_pose`` is the robot's ``[x, y, yaw]``
     in the map frame matched at the last scan; ``pose`` is that moved on by the odometry since;
     ``map`` the ``OccupancyMap`` built so far. The map frame is the world frame when
-    ``initial_pose`` is the robot's true start pose.
+    ``initial_pose`` is the robot's true start pose. The map's square (``config.map_size``)
+    is centred on ``map_center`` ((x, y) m; None: the initial pose).
     """
 
     def __init__(
@@ -81,10 +82,12 @@ class SlamSystem(LeafSystem):
         period: float,
         initial_pose,
         X_base_sensor=(0.0, 0.0, 0.0),
+        map_center=None,
     ):
         super().__init__()
         self._config = config
         self._initial_pose = np.asarray(initial_pose, dtype=float)
+        self._map_center = None if map_center is None else np.asarray(map_center, dtype=float)
         self._X_base_sensor = tuple(float(v) for v in X_base_sensor)
         self._scan = self.DeclareAbstractInputPort("scan", AbstractValue.Make(NO_SCAN))
         self._odometry = self.DeclareVectorInputPort("odometry", 3)
@@ -109,7 +112,12 @@ class SlamSystem(LeafSystem):
         )
 
     def _new_state(self, odometry) -> _SlamState:
-        slam = make_slam(self._config, self._initial_pose, X_base_sensor=self._X_base_sensor)
+        slam = make_slam(
+            self._config,
+            self._initial_pose,
+            X_base_sensor=self._X_base_sensor,
+            map_center=self._map_center,
+        )
         return _SlamState(slam, self._initial_pose if odometry is None else odometry)
 
     def _get(self, context) -> _SlamState:

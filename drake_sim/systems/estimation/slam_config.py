@@ -5,6 +5,8 @@ named beside them; ``scan_matching_slam`` says what each does to a scan."""
 import dataclasses as dc
 from pathlib import Path
 
+import numpy as np
+
 from drake_sim.base.config import load_typed
 from drake_sim.base.errors import ConfigError
 from drake_sim.systems.estimation.loop_closure import LoopClosureConfig
@@ -21,7 +23,7 @@ class SlamConfig:
     # scan's end points peak at occupied cells' centres, so matching is good to a fraction of
     # the finest cell; one finer level halves the drift of a long run (measured in the tests).
     fine_levels: int = 1
-    map_size: float = 30.0  # m, side of the square maps, centred on the initial pose.
+    map_size: float = 30.0  # m, side of the square maps, centred on the start (``map_square``).
     map_update_distance: float = 0.2  # m travelled since the last map update.
     map_update_angle_deg: float = 15.0  # Degrees turned since the last map update.
     initial_map_updates: int = 3  # The first scans always update the map.
@@ -132,3 +134,16 @@ def load_slam_config(path: Path | str) -> SlamConfig:
     config = load_typed(SlamConfig, filename=path)
     config.check(str(path))
     return config
+
+
+def map_square(low, high, initial_xy, map_size: float, margin: float = 1.0):
+    """(centre (x, y), side m) of square maps that hold the box ``low``..``high`` (x, y m) and
+    ``margin`` more: ``map_size`` centred on ``initial_xy`` when that holds it, else centred on
+    the box, as large as it needs (at least ``map_size``)."""
+    low = np.minimum(np.asarray(low, dtype=float), initial_xy) - margin
+    high = np.maximum(np.asarray(high, dtype=float), initial_xy) + margin
+    initial = np.asarray(initial_xy, dtype=float)
+    if np.all(initial - map_size / 2 <= low) and np.all(initial + map_size / 2 >= high):
+        return initial, float(map_size)
+    # ``margin`` more of slack: the grids' corner snaps down to the coarsest cells' lattice.
+    return (low + high) / 2, max(float(map_size), float(np.max(high - low)) + margin)

@@ -205,6 +205,34 @@ def test_map_update_thresholds():
     assert dut.map_updates == 1
 
 
+def test_the_map_square_can_be_centred_elsewhere_on_the_same_cells():
+    """``map_center`` moves the square (to hold a place the start-centred one would miss),
+    its cells on the same lattice: the same scans give the same poses, to the rounding of the
+    cells' coordinates (which a wall on a cell edge can turn into a few mm)."""
+    route = helpers.ROOM_ROUTE[:4]
+    centred = run(helpers.room(), route, helpers.ROOM_START, seed=3)[0]
+    config = dc.replace(mut.SlamConfig(), map_size=12.0)
+    truth = helpers.drive(route, helpers.ROOM_START)
+    odom = helpers.drifting_odometry(truth, seed=3)
+    sensor = np.array([helpers.compose(pose, X_BASE_SENSOR) for pose in truth])
+    ranges, angles = helpers.lidar_scans(helpers.room(), sensor, seed=103)
+    dut = mut.ScanMatchingSlam(config, truth[0], X_BASE_SENSOR, map_center=(0.3, -0.2))
+    grid, other = dut.grids[dut.map_level], centred.grids[centred.map_level]
+    assert grid.log_odds.shape == (240, 240)  # 12 m at 0.05 m
+    low = np.array(grid.origin[:2])
+    assert np.all(low <= [0.3 - 6.0, -0.2 - 6.0]) and np.all(low + 12.0 >= [0.3 + 5.8, -0.2 + 5.8])
+    coarsest = config.resolution * 2 ** (config.levels - 1)
+    cells = (low - np.array(other.origin[:2])) / coarsest
+    np.testing.assert_allclose(cells, np.round(cells), atol=1e-9)
+    for k, (scan, pose) in enumerate(zip(ranges, odom, strict=True)):
+        dut.update(scan, angles, pose, range_max=3.5, range_min=0.12, time=0.2 * k)
+    error = np.hypot(*(dut.trajectory[:, :2] - truth[:, :2]).T)
+    assert math.sqrt(np.mean(error**2)) <= 0.03
+    np.testing.assert_allclose(dut.trajectory, centred.trajectory, atol=0.05)
+    with pytest.raises(ValueError, match="map_center"):
+        mut.ScanMatchingSlam(config, truth[0], map_center=(np.nan, 0.0))
+
+
 def test_copies_are_independent():
     import copy
 

@@ -1,6 +1,7 @@
 """drake_sim.systems.estimation.slam_config: the SLAM's defaults, its YAML file, and every bad
 value named in one line."""
 
+import numpy as np
 import pytest
 
 import drake_sim.systems.estimation.slam_config as mut
@@ -51,3 +52,19 @@ def test_the_loop_closure_section_is_read_and_checked(tmp_path):
     path.write_text("loop_closure: {window_xy: -1}\n")
     with pytest.raises(ConfigError, match="loop_closure: 'window_xy' must be positive"):
         mut.load_slam_config(path)
+
+
+def test_the_map_square_is_centred_on_the_start_when_that_holds_the_place():
+    center, side = mut.map_square([-4.0, -3.0], [4.0, 3.0], [-3.0, -2.0], 30.0)
+    assert side == 30.0 and center.tolist() == [-3.0, -2.0]
+
+
+def test_a_place_the_start_centred_square_misses_gets_a_square_that_holds_it():
+    # An 18 x 14 m hall entered at its corner: 30 m centred on the start reached 7 m of 9.
+    low, high, start = [-9.1, -7.1], [9.1, 7.1], [-8.0, -6.0]
+    center, side = mut.map_square(low, high, start, 30.0)
+    assert side == 30.0 and center.tolist() == pytest.approx([0.0, 0.0])
+    center, side = mut.map_square(low, high, start, 10.0, margin=0.5)
+    assert side == pytest.approx(19.2 + 0.5)  # the larger side, the margins, some slack
+    assert all(center - side / 2 <= np.subtract(low, 0.5))
+    assert all(center + side / 2 >= np.add(high, 0.5))
