@@ -44,11 +44,21 @@ class _SlamState:
         self.history: list[list[float]] = []  # [t, slam x, y, yaw, odometry x, y, yaw] per scan
 
     def __deepcopy__(self, memo):
+        """A copy for Drake's state (three at every scan) that shares the SLAM: a state once
+        set is never changed (``SlamSystem._update`` sets a new one, ``successor``), so its
+        clones need not copy the maps (copied, they were an eighth of an exploring run's
+        time)."""
         other = _SlamState.__new__(_SlamState)
-        other.slam = copy.deepcopy(self.slam, memo)
+        other.slam = self.slam
         other.last_scan_time = self.last_scan_time
         other.odometry_at_scan = self.odometry_at_scan.copy()
         other.history = list(self.history)  # rows are never changed once appended: shared
+        return other
+
+    def successor(self) -> "_SlamState":
+        """A copy of its own to update with the next scan (the SLAM copied)."""
+        other = copy.deepcopy(self)
+        other.slam = copy.deepcopy(self.slam)
         return other
 
 
@@ -141,7 +151,7 @@ class SlamSystem(LeafSystem):
         if scan.ranges.size == 0 or not scan.time > current.last_scan_time:
             return
         odometry = np.array(self._odometry.Eval(context))
-        new = copy.deepcopy(current)
+        new = current.successor()
         new.slam.update(
             scan.ranges,
             scan.angles(),

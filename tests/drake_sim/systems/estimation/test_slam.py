@@ -144,3 +144,29 @@ def test_with_loop_closure_on_the_system_runs_the_pose_graph():
     truth = np.array([true_pose(t) for t in history[:, 0]])
     assert np.hypot(*(history[:, 1:3] - truth[:, :2]).T).max() < 0.03
     assert dut.GetOutputPort("map").Eval(context).occupied().sum() > 100
+
+
+def test_a_cloned_context_shares_the_slam_and_an_update_never_changes_it():
+    """Drake clones the state (three times a scan): the clones share the SLAM, and a scan
+    processed in one context makes a new SLAM, leaving the other context's as it was."""
+    arena = load_arena(config_dir() / "arenas" / "room.yaml")
+    builder = DiagramBuilder()
+    sensors = builder.AddSystem(ScriptedSensors(arena_footprints(arena, height=0.17)))
+    dut = builder.AddSystem(
+        mut.SlamSystem(
+            config=SlamConfig(), period=1.0 / RATE, initial_pose=true_pose(0.0),
+            X_base_sensor=SENSOR,
+        )
+    )  # fmt: skip
+    builder.Connect(sensors.GetOutputPort("scan"), dut.GetInputPort("scan"))
+    builder.Connect(sensors.GetOutputPort("odometry"), dut.GetInputPort("odometry"))
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(1.1)
+    before = simulator.get_context().Clone()
+    slam = dut.slam(dut.GetMyContextFromRoot(before))
+    assert slam is dut.slam(dut.GetMyContextFromRoot(simulator.get_context()))
+    scans, grid = slam.scans, slam.grids[slam.map_level].log_odds.copy()
+    simulator.AdvanceTo(3.1)
+    after = dut.slam(dut.GetMyContextFromRoot(simulator.get_context()))
+    assert after is not slam and after.scans == scans + 10
+    assert slam.scans == scans and np.array_equal(slam.grids[slam.map_level].log_odds, grid)
