@@ -173,6 +173,8 @@ def _no_map_estimate(builder, scenario, robot_parts, start, nav_map):
     if scenario.no_map_localization == "slam":
         low = np.array(nav_map.origin[:2], dtype=float)
         high = low + [nav_map.width_m, nav_map.height_m]
+        # No margin: nav_map has its own (the square's corner snaps down to the coarsest
+        # cells, so its far edge may fall up to one such cell short of nav_map's).
         center, size = map_square(low, high, np.asarray(start)[:2], scenario.slam.map_size, 0.0)
         slam = builder.AddNamedSystem(
             "slam",
