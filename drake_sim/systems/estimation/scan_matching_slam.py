@@ -37,12 +37,9 @@ scans): 0.016 to 0.017 m with hector's marking, 0.004 to 0.011 m with the hit of
 margin below, about 4 to 5 ms per scan.
 
 The map frame is the world frame: the first scan is inserted at ``initial_pose``, and the grids
-(``map_size`` m square) are centred on it, or on ``map_center`` when the place to map is known
-(``slam_config.map_square``: a robot starting in the corner of an 18 m hall otherwise mapped
-only the 15 m a 30 m map reaches on each side of the start; beyond that edge it saw one pillar,
-turned 35 degrees off and lost the hall). The cells lie on one lattice (multiples of the
-coarsest cell) wherever the square is centred: moving it changes what it reaches, and the
-poses only as far as the rounding of the cells' coordinates does.
+(``map_size`` m square) are centred on it, or on ``map_center`` (``slam_config.map_square``:
+the place, when a square centred on the start misses it), on one lattice (multiples of the
+coarsest cell) wherever it is centred.
 """
 
 import copy
@@ -127,22 +124,28 @@ class ScanMatchingSlam:
         self.degenerate = 0  # Matches with a direction the scan did not constrain.
         self.recovered = 0  # Rejected matches a search around the prediction found again.
         self.last_match: MatchResult | None = None
-        # The last scan put into the map: (ranges, angles, range_max, range_min, normals), as
-        # ``redraw`` takes them.
+        # The last scan put into the map: (ranges, angles, range_max, range_min, normals).
         self.last_insert: tuple | None = None
+        self._maps_shared = False  # ``grids`` and ``_match_maps`` shared with a copy
 
     def __deepcopy__(self, memo):
-        """A copy for Drake's state (three at every scan): the grids, match maps and the rest
-        copied deeply; the trajectory's poses and times are never changed once appended, so
-        shared (the lists copied). Copied deeply, they made each copy grow with the run: 120 s
-        of exploring the warehouse (600 scans) copied 581,000 arrays, 8.7 of its 39 s of wall
-        time; shared, 5.3 of 35 s, and no longer growing."""
+        """A copy (``SlamSystem`` makes one per scan): the trajectory's poses and times never
+        change once appended, so shared (copied deeply, 120 s of exploring the warehouse copied
+        581,000 arrays, 8.7 of its 39 s); the grids and match levels too, until either side
+        changes them (``_own_maps``: a scan that updates the map, one in four or five)."""
         other = ScanMatchingSlam.__new__(ScanMatchingSlam)
         memo[id(self)] = other
         for key, value in self.__dict__.items():
-            shared = key in ("_trajectory", "_times")
+            shared = key in ("_trajectory", "_times", "grids", "_match_maps")
             setattr(other, key, list(value) if shared else copy.deepcopy(value, memo))
+        self._maps_shared = other._maps_shared = True
         return other
+
+    def _own_maps(self) -> None:  # Before the grids or levels change: copies them if shared.
+        if self._maps_shared:
+            self.grids = [copy.deepcopy(grid) for grid in self.grids]
+            self._match_maps = [copy.deepcopy(level) for level in self._match_maps]
+            self._maps_shared = False
 
     @property
     def pose(self) -> np.ndarray:
@@ -223,6 +226,7 @@ class ScanMatchingSlam:
         self._odom = odom_pose
         if self._map_due():
             self._insert(ranges, angles, range_max, range_min, normals)
+            self._pyramid()  # now, while the maps are this copy's own (``__deepcopy__``)
         self._trajectory.append(self._pose.copy())
         self._times.append(np.nan if time is None else float(time))
         return self.pose
@@ -341,6 +345,7 @@ class ScanMatchingSlam:
     def redraw(self, scans, pose) -> None:
         """Draws the map again from nothing: ``scans`` are (base pose, then ``last_insert``'s
         five items) in order; the estimate becomes ``pose`` (a pose graph moved them all)."""
+        self._own_maps()
         for grid in self.grids:
             grid.clear()
         self._match_maps = [None] * len(self.grids)
@@ -352,6 +357,7 @@ class ScanMatchingSlam:
         self._last_map_pose = self._pose.copy()
 
     def _insert(self, ranges, angles, range_max, range_min, normals, *, pose=None) -> None:
+        self._own_maps()
         pose = self._pose if pose is None else np.asarray(pose, dtype=float)
         sensor_pose = compose(pose, self.X_base_sensor)
         for grid in self.grids:
@@ -369,10 +375,10 @@ class ScanMatchingSlam:
         self.map_updates += 1
 
     def _pyramid(self) -> list[MatchMap]:
-        """The levels matched against, up to date: each made once from its grid and then
-        brought up to date with what a map update changed (``match_updates.update_level``), so
-        the cost of an update does not grow with the map (made again whole with
-        ``smoothing``)."""
+        """The levels matched against, made once from the grids and then updated with what a
+        map update changed (``match_updates.update_level``; whole again with ``smoothing``)."""
+        if self._match_versions != [grid.version for grid in self.grids]:
+            self._own_maps()
         for k, grid in enumerate(self.grids):
             if self._match_versions[k] != grid.version:
                 changes, box = grid.take_changes(), grid.take_changed_box()

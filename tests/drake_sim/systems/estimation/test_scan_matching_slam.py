@@ -238,14 +238,20 @@ def test_copies_are_independent():
 
     angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
     ranges = helpers.World(2.0, 2.0).cast((0.0, 0.0, 0.0), angles)
-    dut = mut.ScanMatchingSlam()
+    dut = mut.ScanMatchingSlam(dc.replace(mut.SlamConfig(), initial_map_updates=1))
     dut.update(ranges, angles, (0.0, 0.0, 0.0), range_max=3.5)
     twin = copy.deepcopy(dut)  # as a Drake abstract state is copied
+    assert twin.grids[0] is dut.grids[0]  # shared until one of them updates the map
+    before = dut.grids[0].log_odds.copy()
+    twin.update(ranges, angles, (0.0, 0.0, 0.01), range_max=3.5)  # no map update
+    assert twin.grids[0] is dut.grids[0] and twin.map_updates == dut.map_updates
     shifted = helpers.World(2.0, 2.0).cast((0.5, 0.0, 0.0), angles)
     twin.update(shifted, angles, (0.5, 0.0, 0.0), range_max=3.5)
-    assert twin.scans == 2 and dut.scans == 1
+    assert twin.grids[0] is not dut.grids[0] and twin.map_updates == dut.map_updates + 1
+    np.testing.assert_array_equal(dut.grids[0].log_odds, before)
+    assert twin.scans == 3 and dut.scans == 1
     np.testing.assert_array_equal(dut.trajectory, [[0.0, 0.0, 0.0]])  # the poses are shared
-    assert len(twin.times) == 2 and len(dut.times) == 1  # ... but not the lists
+    assert len(twin.times) == 3 and len(dut.times) == 1  # ... but not the lists
     assert not np.array_equal(twin.grids[0].log_odds, dut.grids[0].log_odds)
     np.testing.assert_allclose(twin.pose, (0.5, 0.0, 0.0), atol=0.03)
 
