@@ -22,7 +22,7 @@ from drake_sim.systems.estimation.slam_config import map_square
 from drake_sim.systems.viewer.map_view import MapView
 from drake_sim.systems.viewer.teleop import MeshcatTeleop, TeleopConfig
 from drake_sim.systems.viewer.trails import TrailVisualizer
-from drake_sim.worlds.arena import Arena
+from drake_sim.worlds.arena import Arena, arena_bounds
 
 
 def make_mapping_diagram(
@@ -55,8 +55,7 @@ def make_mapping_diagram(
     robot_parts = add_lidar_robot(builder, scenario, robot=robot, world=arena, start=start)
     X_base_sensor = robot_parts.X_base_sensor
     # The SLAM's map holds the arena and its walls (centred on the start when it can).
-    half = np.array(arena.size, dtype=float) / 2 + arena.wall.thickness
-    center, size = map_square(-half, half, start[:2], scenario.slam.map_size)
+    center, size = map_square(*arena_bounds(arena, walls=True), start[:2], scenario.slam.map_size)
     slam = builder.AddNamedSystem(
         "slam",
         SlamSystem(

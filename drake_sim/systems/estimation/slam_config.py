@@ -140,9 +140,9 @@ def map_square(low, high, initial_xy, map_size: float, margin: float = 1.0):
     """(centre (x, y), side m) of square maps that hold the box ``low``..``high`` (x, y m) and
     ``margin`` more: ``map_size`` centred on ``initial_xy`` when that holds it, else centred on
     the box, as large as it needs (at least ``map_size``)."""
-    low = np.minimum(np.asarray(low, dtype=float), initial_xy) - margin
-    high = np.maximum(np.asarray(high, dtype=float), initial_xy) + margin
     initial = np.asarray(initial_xy, dtype=float)
+    low = np.minimum(np.asarray(low, dtype=float), initial) - margin
+    high = np.maximum(np.asarray(high, dtype=float), initial) + margin
     if np.all(initial - map_size / 2 <= low) and np.all(initial + map_size / 2 >= high):
         return initial, float(map_size)
     # ``margin`` more of slack: the grids' corner snaps down to the coarsest cells' lattice.
