@@ -99,3 +99,10 @@ def relative_pose(a, b) -> np.ndarray:
     x = c * dx + s * dy
     y = -s * dx + c * dy
     return np.stack(np.broadcast_arrays(x, y, wrap_angle(b[..., 2] - a[..., 2])), -1)
+
+
+def same_pose(a, b, distance: float = 0.02, angle: float = math.radians(0.5)) -> bool:
+    """Whether poses ``a`` and ``b`` (x, y, yaw) are within ``distance`` (m) and ``angle``
+    (rad) of each other (a scan matcher's two matches that found one pose)."""
+    offset = relative_pose(a, b)
+    return math.hypot(offset[0], offset[1]) <= distance and abs(offset[2]) <= angle

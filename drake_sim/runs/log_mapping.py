@@ -64,7 +64,7 @@ class LogMappingReport:
     loop_closures: int  # loop-closure constraints added to the pose graph
     odometry_jumps: int  # large odometry steps the scans showed to be jumps (dropped)
     rejected_matches: int  # scans whose match the gate rejected (the prediction stood)
-    map_size_m: float  # side of the square grids the SLAM kept
+    map_size_m: float  # the longer side of the SLAM's grids at the end (they grow as needed)
     map_files: list[str]
     trajectory: str | None
 
@@ -193,7 +193,7 @@ def run(recipe: AppRecipe, args: argparse.Namespace) -> int:
         loop_closures=result.loop_closures,
         odometry_jumps=result.odometry_jumps,
         rejected_matches=result.slam.rejected,
-        map_size_m=result.slam.config.map_size,
+        map_size_m=_map_side(result.slam),
         map_files=files,
         trajectory=str(trajectory) if trajectory is not None and result.scans else None,
     )
@@ -237,3 +237,9 @@ def _name(path: Path) -> str:
         if name.endswith(suffix) and len(name) > len(suffix):
             return name[: -len(suffix)]
     return name or "log"
+
+
+def _map_side(slam) -> float:
+    """m: the longer side of ``slam``'s map grid (a ``GraphSlam``'s matcher's)."""
+    grid = getattr(slam, "local", slam).grids[0]
+    return float(max(grid.shape) * grid.resolution)

@@ -192,6 +192,26 @@ class LogOddsGrid:
         self._changes = []
         self.version += 1
 
+    def extend(self, below: int, above: int, left: int, right: int) -> None:
+        """Adds unknown cells: ``below`` rows under row 0 and ``above`` over the last row,
+        ``left`` columns before column 0 and ``right`` after the last (the origin moves by the
+        cells added below and left). What the grid holds stays where it is in the world; the
+        changes not yet taken are dropped (their flat indices no longer hold: maps built from
+        the grid must be built again)."""
+        self.log_odds = np.pad(self.log_odds, ((below, above), (left, right)))
+        self.origin = (
+            round(self.origin[0] - left * self.resolution, 9),
+            round(self.origin[1] - below * self.resolution, 9),
+        )
+        shift = [below, below, left, left]
+        for name in ("known_box", "changed_box"):
+            box = getattr(self, name)
+            if box is not None:
+                setattr(self, name, [v + d for v, d in zip(box, shift, strict=True)])
+        self._changes = []
+        self._stamp = self._is_hit = None
+        self.version += 1
+
     def to_occupancy_map(
         self,
         *,
@@ -258,6 +278,42 @@ class LogOddsGrid:
         box = [int(rows.min()), int(rows.max()), int(cols.min()), int(cols.max())]
         self.known_box = _union(self.known_box, box)
         self.changed_box = _union(self.changed_box, box)
+
+
+def grow_to_cover(grids: list[LogOddsGrid], points, step: float) -> bool:
+    """Extends every grid of ``grids`` (one origin, cells dividing ``step``) by whole ``step``s
+    (m) on each side where ``points`` ((n, 2), m, world) reach beyond it (or come within
+    ``step`` of its edge), by at least a quarter of the grid's side there, so that a robot
+    going on that way does not extend it again at once; True when they grew. The grids keep
+    the cells they share (a lattice of ``step``), and nothing changes while the points stay
+    inside."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if not len(points):
+        return False
+    grid = grids[0]
+    rows, cols = grid.shape
+    start = np.array(grid.origin)
+    end = start + np.array([cols, rows]) * grid.resolution
+    low, high = points.min(axis=0) - step, points.max(axis=0) + step
+    lacking = np.concatenate([start - low, high - end])  # left, below, right, above
+    if not np.any(lacking > 0):
+        return False
+    quarter = np.tile(0.25 * (end - start), 2)
+    steps = np.where(lacking > 0, np.ceil(np.maximum(lacking, quarter) / step - 1e-9), 0)
+    for each in grids:
+        left, below, right, above = (int(round(n * step / each.resolution)) for n in steps)
+        each.extend(below, above, left, right)
+    return True
+
+
+def scan_ends(sensor_pose, ranges, angles, range_min: float, range_max: float) -> np.ndarray:
+    """(n, 2) m: where the scan's returns (``range_min`` <= range < ``range_max``) end, in the
+    world, from ``sensor_pose`` (x, y, yaw)."""
+    ranges = np.asarray(ranges, dtype=float)
+    hit = np.isfinite(ranges) & (ranges >= range_min) & (ranges < range_max)
+    heading = np.asarray(angles, dtype=float)[hit] + sensor_pose[2]
+    along = ranges[hit, None] * np.stack([np.cos(heading), np.sin(heading)], -1)
+    return np.asarray(sensor_pose[:2], dtype=float) + along
 
 
 def _union(a: list[int] | None, b: list[int]) -> list[int]:

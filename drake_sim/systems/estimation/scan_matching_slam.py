@@ -39,7 +39,8 @@ margin below, about 4 to 5 ms per scan.
 The map frame is the world frame: the first scan is inserted at ``initial_pose``, and the grids
 (``map_size`` m square) are centred on it, or on ``map_center`` (``slam_config.map_square``:
 the place, when a square centred on the start misses it), on one lattice (multiples of the
-coarsest cell) wherever it is centred.
+coarsest cell) wherever it is centred. A scan whose returns reach beyond the grids (within
+``map_size`` of the sensor) extends them first (``occupancy_grid.grow_to_cover``), on that lattice.
 """
 
 import copy
@@ -49,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_sim.base.map_files import OccupancyMap, save_map
-from drake_sim.base.planar import compose, relative_pose
+from drake_sim.base.planar import compose, relative_pose, same_pose
 from drake_sim.systems.estimation.correlative_search import (
     ambiguous,
     make_table,
@@ -57,7 +58,7 @@ from drake_sim.systems.estimation.correlative_search import (
     search,
 )
 from drake_sim.systems.estimation.match_updates import update_level
-from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid
+from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid, grow_to_cover, scan_ends
 from drake_sim.systems.estimation.scan_matcher import (
     MatchMap,
     MatchResult,
@@ -218,7 +219,7 @@ class ScanMatchingSlam:
                 alternative = np.array(alternative_odom_pose, dtype=float)
                 other = compose(self._pose, relative_pose(self._odom, alternative))
                 second = self._scored_match(sensor_points, normals[hit], other)
-                better = second[2] > score and not _same_pose(second[0], pose)
+                better = second[2] > score and not same_pose(second[0], pose)
                 if second[1] and (not accepted or better):
                     (pose, accepted, score), odom_pose = second, alternative
                 self.rejected = rejected + (0 if accepted else 1)  # one count per scan
@@ -360,6 +361,10 @@ class ScanMatchingSlam:
         self._own_maps()
         pose = self._pose if pose is None else np.asarray(pose, dtype=float)
         sensor_pose = compose(pose, self.X_base_sensor)
+        reach = min(range_max, self.config.map_size)
+        ends = scan_ends(sensor_pose, ranges, angles, range_min, reach)
+        if grow_to_cover(self.grids, ends, self.grids[-1].resolution):
+            self._match_maps = [None] * len(self.grids)  # made again from the grown grids
         for grid in self.grids:
             grid.insert_scan(
                 sensor_pose,
@@ -390,10 +395,3 @@ class ScanMatchingSlam:
                 self._match_maps[k] = level
                 self._match_versions[k] = grid.version
         return self._match_maps
-
-
-def _same_pose(a, b, distance: float = 0.02, angle: float = math.radians(0.5)) -> bool:
-    """Whether two matches found one pose (the search after a rejected match can bring a
-    prediction far off to where the odometry's own match is)."""
-    offset = relative_pose(a, b)
-    return math.hypot(offset[0], offset[1]) <= distance and abs(offset[2]) <= angle

@@ -105,3 +105,12 @@ def test_wrap_exact_is_remainder_in_the_same_range():
     assert mut.wrap_angle_exact(math.pi) == mut.wrap_angle_exact(-math.pi) == -math.pi
     assert mut.wrap_angle_exact(3 * math.pi) == -math.pi
     assert isinstance(mut.wrap_angle_exact(1), float)
+
+
+def test_same_pose_within_a_distance_and_an_angle():
+    a = np.array([1.0, 2.0, math.pi - 0.001])
+    assert mut.same_pose(a, a + [0.01, -0.01, 0.0])
+    assert mut.same_pose(a, [1.0, 2.0, -math.pi + 0.005])  # across the wrap
+    assert not mut.same_pose(a, a + [0.03, 0.0, 0.0])
+    assert not mut.same_pose(a, a - [0.0, 0.0, 0.02])
+    assert mut.same_pose(a, a + [0.1, 0.0, 0.0], distance=0.2)

@@ -6,6 +6,7 @@ import dataclasses as dc
 import numpy as np
 
 from drake_sim.systems.estimation import log_slam as mut
+from drake_sim.systems.estimation.occupancy_grid import known_fraction
 from drake_sim.systems.estimation.slam_config import SlamConfig
 from tests import log_helpers as lh
 from tests import slam_helpers as sh
@@ -92,3 +93,24 @@ def test_the_map_is_sized_to_the_log():
     side = mut.map_side(dc.replace(log, scans=far), SlamConfig())
     extent = np.ptp(odometry[:, :2] * 20.0, axis=0).max()
     assert side >= extent + 2 * 3.0 and side % mut.MAP_SIDE_STEP == 0
+
+
+def test_a_log_that_starts_at_one_end_of_a_corridor_maps_the_far_end():
+    # The map starts centred on the first pose, sized to the odometry's extent (a 40 m square
+    # here, reaching 6 m past the middle of a 30 m corridor driven end to end): it grows as the
+    # scans reach beyond it, on the same cells, so the SLAM tracks and maps the far end exactly
+    # as with a square that held the whole corridor from the start.
+    world = sh.doorways()
+    truth = sh.drive([(14.0, 0.0)], (-14.0, 0.0, 0.0))
+    odometry = sh.drifting_odometry(truth, seed=1)
+    ranges, angles = sh.lidar_scans(world, truth, seed=1, range_max=lh.RANGE_MAX)
+    log = lh.laser_log(truth, odometry, ranges, angles)
+    assert mut.map_side(log, SlamConfig()) == 40.0
+    result = mut.run_log_slam(log, SlamConfig())
+    held = mut.run_log_slam(log, dc.replace(SlamConfig(), map_size=80.0))
+    np.testing.assert_allclose(result.poses, held.poses, atol=1e-9)
+    assert lh.rmse(result.poses, truth) < 0.1 < lh.rmse(odometry, truth)
+    occupancy = result.slam.map()
+    assert occupancy.origin[0] + occupancy.width_m > 15.0  # the corridor's far end wall
+    assert np.array_equal(occupancy.cells, held.slam.map().cells)
+    assert known_fraction(occupancy, world.truth(0.05)) > 0.5

@@ -259,3 +259,51 @@ def test_clear_forgets_every_scan_and_the_same_scans_draw_the_same_grid_again():
     for pose, ranges in scans:
         grid.insert_scan(pose, ranges, [0.0, 1.0], 3.5)
     np.testing.assert_array_equal(grid.log_odds, drawn)
+
+
+def test_extend_adds_unknown_cells_and_keeps_the_map_where_it_was():
+    grid = make_grid()
+    grid.insert_scan((0.0, 0.0, 0.0), [2.0], [0.0], 3.5)
+    before = grid.to_occupancy_map(crop=False)
+    grid.take_changed_box()
+    grid.extend(4, 2, 6, 0)
+    assert grid.shape == (160 + 6, 200 + 6) and grid.origin == (-5.3, -4.2)
+    after = grid.to_occupancy_map(crop=False)
+    assert np.array_equal(after.cells[4:-2, 6:], before.cells)
+    assert (after.cells[:4] == -1).all() and (after.cells[:, :6] == -1).all()
+    assert value(grid, 2.0, 0.0) > 0 and value(grid, 1.0, 0.0) < 0
+    rows, cols = np.nonzero(after.cells >= 0)  # the known box moved with the cells
+    assert grid.known_box == [rows.min(), rows.max(), cols.min(), cols.max()]
+    assert grid.take_changes()[0].size == 0  # flat indices of the old shape: dropped
+    grid.insert_scan((-5.2, -4.1, 0.0), [0.5], [0.0], 3.5)  # in the new cells
+    assert value(grid, -4.7, -4.1) > 0
+
+
+def test_grids_grow_to_cover_points_beyond_them_on_one_lattice():
+    grids = [
+        mut.LogOddsGrid(resolution=r, size=(4.0, 4.0), origin=(-2.0, -2.0))
+        for r in (0.025, 0.05, 0.1, 0.2)
+    ]
+    assert not mut.grow_to_cover(grids, [[1.5, -1.5], [-1.7, 1.7]], 0.2)  # inside: unchanged
+    assert grids[1].shape == (80, 80) and grids[1].origin == (-2.0, -2.0)
+    assert mut.grow_to_cover(grids, [[2.5, 0.0]], 0.2)
+    for grid in grids:
+        # Right: 0.7 m lacking (with a step's margin), a quarter of the side added (1 m, 5
+        # steps of 0.2); the other sides as they were.
+        assert grid.origin == (-2.0, -2.0)
+        assert grid.shape[1] * grid.resolution == pytest.approx(5.0)
+        assert grid.shape[0] * grid.resolution == pytest.approx(4.0)
+    assert mut.grow_to_cover(grids, [[0.0, -2.1]], 0.2)  # just beyond: at least a quarter
+    for grid in grids:
+        assert grid.origin == pytest.approx((-2.0, -3.0))
+        assert grid.shape[0] * grid.resolution == pytest.approx(5.0)
+    assert mut.grow_to_cover(grids, [[6.05, 0.0]], 0.2)  # far beyond: as far as it needs
+    assert grids[0].shape[1] * grids[0].resolution == pytest.approx(8.4)  # to 6.4 > 6.25
+    assert not mut.grow_to_cover(grids, np.zeros((0, 2)), 0.2)
+
+
+def test_scan_ends_are_the_returns_in_the_world():
+    ends = mut.scan_ends(
+        (1.0, 2.0, math.pi / 2), [1.0, np.inf, 0.05, 3.0, 2.0], [0.0] * 5, 0.1, 2.5
+    )
+    np.testing.assert_allclose(ends, [[1.0, 3.0], [1.0, 4.0]], atol=1e-12)

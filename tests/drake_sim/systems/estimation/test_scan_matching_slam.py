@@ -279,3 +279,25 @@ def test_redraw_draws_the_map_from_the_scans_at_the_poses_given(room_run):
     shifted = [(compose(pose, [0.1, 0.0, 0.0]), *rest) for pose, *rest in kept]
     slam.redraw(shifted, truth[5])
     assert (slam.map(crop=False).cells != drawn).any()
+
+
+def test_a_map_too_small_for_the_place_grows_as_the_robot_goes():
+    # A 4 m square centred on the start holds an eighth of the 8 m x 6 m room: the grids grow
+    # as the scans reach beyond them, on the same cells, and the SLAM maps the whole room as
+    # well as with a square that held it from the start.
+    config = dc.replace(mut.SlamConfig(), map_size=4.0)
+    dut, truth, _ = run(
+        helpers.room(), helpers.ROOM_ROUTE, helpers.ROOM_START, seed=7, config=config
+    )
+    error = np.hypot(*(dut.trajectory[:, :2] - truth[:, :2]).T)
+    assert math.sqrt(np.mean(error**2)) <= 0.05
+    result, room = dut.map(), helpers.room().truth(0.05)
+    assert occupancy_iou(result, room) >= 0.9 and known_fraction(result, room) >= 0.95
+    grid = dut.grids[dut.map_level]
+    assert grid.shape[0] * 0.05 >= 6.0 and grid.shape[1] * 0.05 >= 8.0
+    coarsest = dut.grids[-1].resolution
+    for each in dut.grids:
+        assert each.origin == dut.grids[-1].origin
+        assert each.shape[1] * each.resolution == pytest.approx(dut.grids[-1].shape[1] * coarsest)
+    held = room_run_with(7)[0]  # the default 30 m square
+    np.testing.assert_allclose(dut.trajectory[:, :2], held.trajectory[:, :2], atol=0.05)
