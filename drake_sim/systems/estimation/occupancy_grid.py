@@ -306,16 +306,6 @@ def grow_to_cover(grids: list[LogOddsGrid], points, step: float) -> bool:
     return True
 
 
-def scan_ends(sensor_pose, ranges, angles, range_min: float, range_max: float) -> np.ndarray:
-    """(n, 2) m: where the scan's returns (``range_min`` <= range < ``range_max``) end, in the
-    world, from ``sensor_pose`` (x, y, yaw)."""
-    ranges = np.asarray(ranges, dtype=float)
-    hit = np.isfinite(ranges) & (ranges >= range_min) & (ranges < range_max)
-    heading = np.asarray(angles, dtype=float)[hit] + sensor_pose[2]
-    along = ranges[hit, None] * np.stack([np.cos(heading), np.sin(heading)], -1)
-    return np.asarray(sensor_pose[:2], dtype=float) + along
-
-
 def _union(a: list[int] | None, b: list[int]) -> list[int]:
     """The smallest [row_min, row_max, col_min, col_max] box holding boxes ``a`` and ``b``."""
     if a is None:

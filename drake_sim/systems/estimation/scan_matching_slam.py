@@ -57,8 +57,9 @@ from drake_sim.systems.estimation.correlative_search import (
     occupied_points,
     search,
 )
+from drake_sim.systems.estimation.loop_closure import scan_points
 from drake_sim.systems.estimation.match_updates import update_level
-from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid, grow_to_cover, scan_ends
+from drake_sim.systems.estimation.occupancy_grid import LogOddsGrid, grow_to_cover
 from drake_sim.systems.estimation.scan_matcher import (
     MatchMap,
     MatchResult,
@@ -361,9 +362,10 @@ class ScanMatchingSlam:
         self._own_maps()
         pose = self._pose if pose is None else np.asarray(pose, dtype=float)
         sensor_pose = compose(pose, self.X_base_sensor)
-        reach = min(range_max, self.config.map_size)
-        ends = scan_ends(sensor_pose, ranges, angles, range_min, reach)
-        if grow_to_cover(self.grids, ends, self.grids[-1].resolution):
+        hits = scan_points(
+            ranges, angles, range_max, range_min, self.X_base_sensor, self.config.map_size
+        )
+        if grow_to_cover(self.grids, transform_points(pose, hits), self.grids[-1].resolution):
             self._match_maps = [None] * len(self.grids)  # made again from the grown grids
         for grid in self.grids:
             grid.insert_scan(

@@ -300,10 +300,3 @@ def test_grids_grow_to_cover_points_beyond_them_on_one_lattice():
     assert mut.grow_to_cover(grids, [[6.05, 0.0]], 0.2)  # far beyond: as far as it needs
     assert grids[0].shape[1] * grids[0].resolution == pytest.approx(8.4)  # to 6.4 > 6.25
     assert not mut.grow_to_cover(grids, np.zeros((0, 2)), 0.2)
-
-
-def test_scan_ends_are_the_returns_in_the_world():
-    ends = mut.scan_ends(
-        (1.0, 2.0, math.pi / 2), [1.0, np.inf, 0.05, 3.0, 2.0], [0.0] * 5, 0.1, 2.5
-    )
-    np.testing.assert_allclose(ends, [[1.0, 3.0], [1.0, 4.0]], atol=1e-12)
